@@ -1,0 +1,43 @@
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "prtlab/build_info.h"
+#include "prtlab/error.h"
+#include "prtlab/log.h"
+#include "prtlab/progress.h"
+
+int main(int argc, char** argv) {
+  using namespace prt;
+  cli::set_command_line(argc, argv);
+  CLI::App app{"prtlab: compare compressors of precomputed radiance transfer", "prtlab"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", fmt::format("prtlab {} ({}, {})", build_info().version,
+                                                build_info().git_hash, build_info().build_type));
+  auto& g = cli::global_options();
+  app.add_flag("-q,--quiet", g.quiet, "No progress bars or info messages");
+  app.add_flag("-v,--verbose", g.verbose, "Debug messages");
+  app.parse_complete_callback([&] {
+    if (g.quiet) {
+      Progress::set_quiet(true);
+      set_log_level(LogLevel::kWarn);
+    }
+    if (g.verbose) set_log_level(LogLevel::kDebug);
+  });
+
+  cli::add_scene_commands(app);
+  cli::add_env_commands(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const prt::Error& e) {
+    std::fprintf(stderr, "prtlab: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "prtlab: unexpected error: %s\n", e.what());
+    return 3;
+  }
+  return 0;
+}

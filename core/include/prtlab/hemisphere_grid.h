@@ -1,0 +1,46 @@
+#pragma once
+// The local direction basis: an S x S grid over the upper hemisphere (z > 0 in the local
+// frame) through the Shirley-Chiu concentric map, which is area preserving, so every cell
+// has solid angle 2 pi / S^2 exactly. M = S^2.
+//
+// Unit square (a, b) in [0,1]^2 -> disk (concentric map) -> hemisphere by
+//   r^2 = x^2 + y^2,  z = 1 - r^2,  (x, y) *= sqrt(2 - r^2).
+// Cell j = row * S + col covers a in [col/S, (col+1)/S], b in [row/S, (row+1)/S].
+// The cell "centre" is the image of the square's centre (a, b) = ((col+.5)/S, (row+.5)/S).
+// The same grid serves BTF view samples.
+#include <vector>
+
+#include "prtlab/types.h"
+
+namespace prt {
+
+/// Concentric map of the unit square onto the unit disk, and its inverse.
+Vec2d square_to_disk_concentric(const Vec2d& ab);
+Vec2d disk_to_square_concentric(const Vec2d& xy);
+/// Area-preserving unit square -> upper hemisphere, and its inverse (z >= 0 assumed; a
+/// direction with z < 0 is mapped as if mirrored to z >= 0).
+Vec3d square_to_hemisphere(const Vec2d& ab);
+Vec2d hemisphere_to_square(const Vec3d& d);
+
+class HemisphereGrid {
+ public:
+  explicit HemisphereGrid(int side);
+
+  int side() const { return s_; }               ///< S
+  int cell_count() const { return s_ * s_; }    ///< M
+  /// Local direction of cell j's centre (unit, z > 0).
+  Vec3d direction(int j) const { return directions_[j]; }
+  const std::vector<Vec3d>& directions() const { return directions_; }
+  /// Solid angle of every cell: 2 pi / S^2.
+  double cell_solid_angle() const;
+  /// Cell containing local direction d (z > 0); -1 when d is below the horizon (z <= 0).
+  int cell_of(const Vec3d& d) const;
+  /// Continuous square coordinates of d, for interpolation between cells.
+  Vec2d square_coords(const Vec3d& d) const { return hemisphere_to_square(d); }
+
+ private:
+  int s_;
+  std::vector<Vec3d> directions_;
+};
+
+}  // namespace prt

@@ -1,0 +1,24 @@
+#pragma once
+// Orthonormal local frame (tangent t, bitangent b, normal n), right-handed: t x b = n.
+// Local coordinates of a world direction d are (d.t, d.b, d.n).
+#include "prtlab/types.h"
+
+namespace prt {
+
+struct LocalFrame {
+  Vec3d t{1, 0, 0};
+  Vec3d b{0, 1, 0};
+  Vec3d n{0, 0, 1};
+
+  Vec3d to_local(const Vec3d& d) const { return {glm::dot(d, t), glm::dot(d, b), glm::dot(d, n)}; }
+  Vec3d to_world(const Vec3d& l) const { return l.x * t + l.y * b + l.z * n; }
+
+  /// A stable frame from the normal alone (Duff et al. 2017, "Building an orthonormal basis,
+  /// revisited"): continuous except on a measure-zero set, no branch on a threshold.
+  static LocalFrame from_normal(const Vec3d& n);
+  /// A frame whose tangent follows `tangent` projected into the normal's plane
+  /// (Gram-Schmidt); falls back to from_normal when the projection is degenerate.
+  static LocalFrame from_normal_tangent(const Vec3d& n, const Vec3d& tangent);
+};
+
+}  // namespace prt
