@@ -1,5 +1,167 @@
+// `prtlab env info` and `prtlab env cubemap`: inspect a lat-long EXR and resample it onto the
+// cubemap basis. Documented in docs/cli.md (every option and JSON key).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+
 #include "commands.h"
+#include "prtlab/data_paths.h"
+#include "prtlab/environment_map.h"
+#include "prtlab/image_io.h"
+#include "prtlab/log.h"
 
 namespace prt::cli {
-void add_env_commands(CLI::App& app) { app.add_subcommand("env", "Environment maps: inspect and resample")->require_subcommand(1); }
+namespace {
+
+nlohmann::json rgb_json(const Vec3d& v) {
+  return nlohmann::json::array({v.x, v.y, v.z});
+}
+
+struct EnvStats {
+  Vec3d min{std::numeric_limits<double>::infinity()};
+  Vec3d max{-std::numeric_limits<double>::infinity()};
+  Vec3d mean{0.0};   ///< solid-angle weighted: power / 4 pi
+  Vec3d power{0.0};  ///< integral of radiance over the sphere
+};
+
+EnvStats env_stats(const LatLongImage& image) {
+  EnvStats s;
+  for (const Rgb& t : image.texels) {
+    s.min = glm::min(s.min, Vec3d(t));
+    s.max = glm::max(s.max, Vec3d(t));
+  }
+  s.power = image.total_power();
+  s.mean = s.power / kFourPi;
+  return s;
+}
+
+std::string rgb_text(const Vec3d& v) {
+  return fmt::format("{:.6g} {:.6g} {:.6g}", v.x, v.y, v.z);
+}
+
+Vec3d relative_difference(const Vec3d& after, const Vec3d& before) {
+  Vec3d d{0.0};
+  for (int c = 0; c < 3; ++c)
+    d[c] = before[c] != 0.0 ? (after[c] - before[c]) / before[c] : after[c] - before[c];
+  return d;
+}
+
+struct InfoOptions {
+  std::string input;
+  bool json = false;
+};
+
+void run_info(const InfoOptions& o) {
+  const std::filesystem::path file = resolve_envmap(o.input);
+  EnvLoadReport report;
+  const LatLongImage image = load_latlong_exr(file, &report);
+  const EnvStats s = env_stats(image);
+  if (o.json) {
+    print_json({{"file", file.string()},
+                {"width", image.width},
+                {"height", image.height},
+                {"min", rgb_json(s.min)},
+                {"max", rgb_json(s.max)},
+                {"mean", rgb_json(s.mean)},
+                {"power", rgb_json(s.power)},
+                {"invalid_texels", report.invalid_texels}});
+    return;
+  }
+  std::printf("file            %s\n", file.string().c_str());
+  std::printf("size            %d x %d texels (lat-long)\n", image.width, image.height);
+  std::printf("min radiance    %s\n", rgb_text(s.min).c_str());
+  std::printf("max radiance    %s\n", rgb_text(s.max).c_str());
+  std::printf("mean radiance   %s   (solid-angle weighted)\n", rgb_text(s.mean).c_str());
+  std::printf("power           %s   (integral of radiance over the sphere)\n",
+              rgb_text(s.power).c_str());
+  std::printf("invalid texels  %zu   (NaN, Inf or negative; set to 0)\n", report.invalid_texels);
+}
+
+struct CubemapOptions {
+  std::string input;
+  int resolution = 32;
+  std::string out;
+  std::string preview;
+  bool json = false;
+};
+
+void run_cubemap(const CubemapOptions& o) {
+  const std::filesystem::path file = resolve_envmap(o.input);
+  EnvLoadReport report;
+  const LatLongImage image = load_latlong_exr(file, &report);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Cubemap cubemap = resample_to_cubemap(image, o.resolution);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_exr(cubemap_strip_image(cubemap), o.out);
+  if (!o.preview.empty()) write_png(cubemap_cross_image(cubemap), o.preview);
+
+  const Vec3d before = image.total_power(), after = cubemap.total_power();
+  const Vec3d rel = relative_difference(after, before);
+  if (o.json) {
+    print_json(
+        {{"file", file.string()},
+         {"width", image.width},
+         {"height", image.height},
+         {"resolution", o.resolution},
+         {"out", o.out},
+         {"preview", o.preview.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preview)},
+         {"power_latlong", rgb_json(before)},
+         {"power_cubemap", rgb_json(after)},
+         {"power_relative_difference", rgb_json(rel)},
+         {"invalid_texels", report.invalid_texels},
+         {"resample_seconds", seconds}});
+    return;
+  }
+  std::printf("input           %s (%d x %d)\n", file.string().c_str(), image.width, image.height);
+  std::printf("cubemap         6 x %d x %d = %d pixels, resampled in %.3f s\n", o.resolution,
+              o.resolution, cubemap.layout.pixel_count(), seconds);
+  std::printf("power lat-long  %s\n", rgb_text(before).c_str());
+  std::printf("power cubemap   %s\n", rgb_text(after).c_str());
+  std::printf("relative diff   %.3g %.3g %.3g\n", rel.x, rel.y, rel.z);
+  std::printf("wrote           %s (6R x R strip, faces +X -X +Y -Y +Z -Z)\n", o.out.c_str());
+  if (!o.preview.empty()) std::printf("wrote           %s (cross preview)\n", o.preview.c_str());
+}
+
+}  // namespace
+
+void add_env_commands(CLI::App& app) {
+  CLI::App* env = app.add_subcommand("env", "Environment maps: inspect and resample");
+  env->require_subcommand(1);
+
+  auto info = std::make_shared<InfoOptions>();
+  CLI::App* info_cmd = env->add_subcommand(
+      "info",
+      "Print size, min/max/mean radiance, total power and invalid texels of a lat-long EXR");
+  info_cmd
+      ->add_option("exr", info->input,
+                   "Lat-long EXR: a path, or a name from the data cache (e.g. courtyard)")
+      ->required();
+  info_cmd->add_flag("--json", info->json, "Print one JSON object (keys in docs/cli.md)");
+  info_cmd->callback([info] { run_info(*info); });
+
+  auto cube = std::make_shared<CubemapOptions>();
+  CLI::App* cube_cmd = env->add_subcommand(
+      "cubemap", "Resample a lat-long EXR onto a 6 x R x R cubemap (exact texel/pixel overlaps)");
+  cube_cmd
+      ->add_option("exr", cube->input,
+                   "Lat-long EXR: a path, or a name from the data cache (e.g. courtyard)")
+      ->required();
+  cube_cmd->add_option("--res", cube->resolution, "Cubemap face resolution R")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8192));
+  cube_cmd->add_option("--out", cube->out, "Output EXR: the faces side by side, 6R x R, float RGB")
+      ->required();
+  cube_cmd->add_option("--preview", cube->preview,
+                       "Also write a tone-mapped PNG of the faces as a cross (4R x 3R)");
+  cube_cmd->add_flag("--json", cube->json, "Print one JSON object (keys in docs/cli.md)");
+  cube_cmd->callback([cube] { run_cubemap(*cube); });
+}
+
 }  // namespace prt::cli

@@ -159,7 +159,8 @@ SceneDesc parse_scene(const fs::path& file) {
     const auto* t = node.as_table();
     if (!t) throw InputError(file, "each [[part]] must be a table");
     reject_unknown_keys(file, *t,
-                        {"name", "mesh", "btf", "uv_scale", "target_vertices", "transform", "normalize", "params"},
+                        {"name", "mesh", "btf", "uv_scale", "target_vertices", "transform", "normalize", "params",
+                         "instance"},
                         "a [[part]]");
     const toml::node_view<const toml::node> p{*t};
     ScenePart part;
@@ -189,6 +190,18 @@ SceneDesc parse_scene(const fs::path& file) {
         part.params[std::string(k.str())] = *val;
       }
     }
+    if (const auto* inst = (*t)["instance"].as_array()) {
+      for (const auto& in : *inst) {
+        const auto* it = in.as_table();
+        if (!it) throw InputError(file, fmt::format("part '{}': each [[part.instance]] must be a table", part.name));
+        reject_unknown_keys(file, *it, {"scale", "translate"}, "a part instance");
+        const toml::node_view<const toml::node> x{*it};
+        part.instances.push_back({vec3(file, x["scale"], "scale", Vec3d(1.0)),
+                                  vec3(file, x["translate"], "translate", Vec3d(0.0))});
+      }
+    } else if (p["instance"]) {
+      throw InputError(file, fmt::format("part '{}': 'instance' must be an array of tables", part.name));
+    }
     d.parts.push_back(std::move(part));
   }
   if (d.target_vertices && d.parts.size() != 1)
@@ -217,10 +230,23 @@ Scene build_scene(const SceneDesc& desc) {
     apply_transform(m, part.transform);
     if (part.uv_scale != 1.0)
       for (auto& uv : m.uvs) uv *= static_cast<float>(part.uv_scale);
-    scene.mesh.append(m, static_cast<std::uint16_t>(i));
+    // Loaded meshes get smooth normals here; procedural shapes keep their analytic ones
+    // (recomputing would bend normals at UV-seam duplicates and box edges).
+    if (m.normals.size() != m.vertex_count()) compute_smooth_normals(m);
+    if (m.tangents.size() != m.vertex_count()) compute_tangents(m);
+    if (part.instances.empty()) {
+      scene.mesh.append(m, static_cast<std::uint16_t>(i));
+    } else {
+      for (const auto& inst : part.instances) {
+        Mesh copy = m;
+        Transform xf;
+        xf.scale = inst.scale;
+        xf.translate = inst.translate;
+        apply_transform(copy, xf);
+        scene.mesh.append(copy, static_cast<std::uint16_t>(i));
+      }
+    }
   }
-  compute_smooth_normals(scene.mesh);
-  compute_tangents(scene.mesh);
   return scene;
 }
 

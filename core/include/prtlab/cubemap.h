@@ -13,7 +13,10 @@
 // Pixel index k = face * R * R + y * R + x.
 //
 // Solid angles are exact (the area of the spherical quadrilateral), not the centre
-// approximation: they sum to 4 pi to rounding.
+// approximation: they sum to 4 pi to rounding. Pixel edges are great circles, so a pixel is
+// the set of directions that project into its square on the face; it is not the set of
+// directions nearest its centre (they differ in slivers near the skewed corners of a face).
+// See docs/conventions.md.
 #include <array>
 #include <cstdint>
 #include <span>
@@ -25,6 +28,7 @@ namespace prt {
 
 class CubemapLayout {
  public:
+  /// Throws ParameterError unless 1 <= resolution <= 8192.
   explicit CubemapLayout(int resolution);
 
   int resolution() const { return r_; }
@@ -37,9 +41,13 @@ class CubemapLayout {
   double solid_angle(int k) const;
   /// Unit direction through face coordinates (s, t) in [-1, 1]^2.
   static Vec3d face_direction(int face, double s, double t);
-  /// Pixel containing direction d (need not be normalised; must be non-zero).
+  /// Pixel containing direction d (need not be normalised; must be finite and non-zero).
+  /// Directions on a face edge or corner get one of the touching pixels (never an index out
+  /// of range): ties of the major axis go to X, then Y, then Z, and s = +1 goes to the last
+  /// column.
   int pixel_of(const Vec3d& d) const;
-  /// Face and continuous face coordinates (s, t) in [-1, 1] of direction d.
+  /// Face and continuous face coordinates (s, t) in [-1, 1] of direction d (the face of the
+  /// largest |component|, ties as in pixel_of).
   static void face_coords(const Vec3d& d, int& face, double& s, double& t);
 
   /// Precomputed tables (size N) for loops that visit every pixel.

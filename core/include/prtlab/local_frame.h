@@ -14,10 +14,13 @@ struct LocalFrame {
   Vec3d to_world(const Vec3d& l) const { return l.x * t + l.y * b + l.z * n; }
 
   /// A stable frame from the normal alone (Duff et al. 2017, "Building an orthonormal basis,
-  /// revisited"): continuous except on a measure-zero set, no branch on a threshold.
+  /// revisited"): continuous except across the plane n.z = 0, no branch on a threshold.
+  /// n is normalised first (must be finite and non-zero). n = +z gives t = +x, b = +y;
+  /// n = -z gives t = +x, b = -y.
   static LocalFrame from_normal(const Vec3d& n);
   /// A frame whose tangent follows `tangent` projected into the normal's plane
-  /// (Gram-Schmidt); falls back to from_normal when the projection is degenerate.
+  /// (Gram-Schmidt), b = n x t; falls back to from_normal when the projection is degenerate
+  /// (shorter than 1e-8 |tangent|, zero or not finite).
   static LocalFrame from_normal_tangent(const Vec3d& n, const Vec3d& tangent);
 };
 

@@ -17,6 +17,9 @@
 //   normalize = true         # fit into the unit box resting on y = 0 before the transform
 //   [part.params]            # procedural shape parameters
 //   radius = 0.5
+//   [[part.instance]]        # optional copies of the part (scale, then translate), after
+//   translate = [1, 0, 0]    # the part's transform; without any, the part appears once
+//   scale = [1, 2, 1]
 //
 // Unknown keys are an error that lists the valid ones (a typo is never a silent default).
 #include <cstdint>
@@ -40,6 +43,11 @@ struct ScenePart {
   Transform transform;
   bool normalize = false;
   std::map<std::string, double> params;  ///< procedural shape parameters
+  struct Instance {
+    Vec3d scale{1.0};
+    Vec3d translate{0.0};
+  };
+  std::vector<Instance> instances;  ///< empty: one copy, untransformed
 };
 
 struct SceneDesc {

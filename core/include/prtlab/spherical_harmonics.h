@@ -17,10 +17,16 @@ namespace prt {
 
 inline constexpr int kMaxShOrder = 10;
 
-inline int sh_count(int order) { return order * order; }
-inline int sh_index(int l, int m) { return l * (l + 1) + m; }
+constexpr int sh_count(int order) {
+  return order * order;
+}
+constexpr int sh_index(int l, int m) {
+  return l * (l + 1) + m;
+}
 
-/// Evaluate all order^2 real SH at unit direction d into out (size >= order^2).
+/// Evaluate all order^2 real SH at unit direction d into out (size >= order^2). d must be
+/// unit length (not normalised here: this is the inner loop of projections). Lower orders
+/// are a prefix of higher ones, value for value.
 void sh_eval(int order, const Vec3d& d, std::span<double> out);
 
 /// SH coefficients per channel (size order^2 each), projected by cubemap quadrature:
@@ -29,8 +35,10 @@ struct ShCoeffs {
   int order = 0;
   std::vector<Vec3d> coeffs;  ///< RGB per coefficient, size order^2
 };
+/// Throws ParameterError unless 1 <= order <= kMaxShOrder. Deterministic (partial sums per
+/// face, added in face order).
 ShCoeffs sh_project(const Cubemap& radiance, int order);
-/// Evaluate an SH expansion at direction d.
+/// Evaluate an SH expansion at unit direction d.
 Vec3d sh_evaluate(const ShCoeffs& c, const Vec3d& d);
 
 }  // namespace prt

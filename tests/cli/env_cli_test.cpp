@@ -1,0 +1,164 @@
+// `prtlab env info` and `prtlab env cubemap` run as a user would: exit codes, output files,
+// the documented JSON keys, and errors that name the file.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "prtlab/environment_map.h"
+#include "prtlab/image_io.h"
+
+namespace prt {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class EnvCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("prtlab_env_cli_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // A small procedural environment, written as a user's lat-long EXR would be.
+    SunSky env;
+    const LatLongImage ll = env.to_latlong(128, 64);
+    RgbImage img(ll.width, ll.height);
+    img.pixels = ll.texels;
+    exr_ = dir_ / "sky.exr";
+    write_exr(img, exr_);
+    power_ = ll.total_power();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  RunResult run(const std::string& args) const {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = std::string("\"") + PRTLAB_CLI_PATH + "\" " + args + " >\"" +
+                            out.string() + "\" 2>\"" + err.string() + "\"";
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  fs::path dir_, exr_;
+  Vec3d power_{0.0};
+};
+
+TEST_F(EnvCli, CubemapWritesStripAndPreview) {
+  const fs::path out = dir_ / "cube.exr", png = dir_ / "cube.png";
+  const RunResult r = run("env cubemap \"" + exr_.string() + "\" --res 8 --out \"" + out.string() +
+                          "\" --preview \"" + png.string() + "\" --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(out));
+  ASSERT_TRUE(fs::exists(png));
+  EXPECT_GT(fs::file_size(png), 0u);
+  const RgbImage strip = read_exr(out);
+  EXPECT_EQ(strip.width, 48);
+  EXPECT_EQ(strip.height, 8);
+
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const char* key :
+       {"file", "width", "height", "resolution", "out", "preview", "power_latlong", "power_cubemap",
+        "power_relative_difference", "invalid_texels", "resample_seconds", "prtlab"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["resolution"], 8);
+  EXPECT_EQ(j["width"], 128);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(j["power_latlong"][c].get<double>(), power_[c], 1e-9 * power_[c]);
+    EXPECT_NEAR(j["power_cubemap"][c].get<double>(), power_[c], 1e-6 * power_[c]);
+    EXPECT_LT(std::abs(j["power_relative_difference"][c].get<double>()), 1e-6);
+  }
+  // The strip on disk carries the same power.
+  const Cubemap back = cubemap_from_strip_image(strip, out);
+  EXPECT_NEAR(back.total_power().x, power_.x, 1e-6 * power_.x);
+
+  // Without --json: human-readable, still exit 0; without --preview no PNG is needed.
+  const RunResult text = run("env cubemap \"" + exr_.string() + "\" --res 4 --out \"" +
+                             (dir_ / "c4.exr").string() + "\"");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("power cubemap"), std::string::npos) << text.out;
+  EXPECT_TRUE(fs::exists(dir_ / "c4.exr"));
+}
+
+TEST_F(EnvCli, InfoJsonHasTheDocumentedKeys) {
+  const RunResult r = run("env info \"" + exr_.string() + "\" --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const char* key :
+       {"file", "width", "height", "min", "max", "mean", "power", "invalid_texels"}) {
+    ASSERT_TRUE(j.contains(key)) << key << " missing in " << r.out;
+  }
+  for (const char* key : {"min", "max", "mean", "power"}) {
+    ASSERT_TRUE(j[key].is_array() && j[key].size() == 3) << key;
+  }
+  EXPECT_EQ(j["file"], exr_.string());
+  EXPECT_EQ(j["width"], 128);
+  EXPECT_EQ(j["height"], 64);
+  EXPECT_EQ(j["invalid_texels"], 0);
+  const SunSky env;
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(j["power"][c].get<double>(), power_[c], 1e-9 * power_[c]);
+    EXPECT_NEAR(j["mean"][c].get<double>(), power_[c] / kFourPi, 1e-9 * power_[c]);
+    EXPECT_NEAR(j["max"][c].get<double>(), env.sun[c], 1e-3);  // sun texels are fully lit
+    EXPECT_NEAR(j["min"][c].get<double>(), env.ground[c], 1e-6);
+  }
+  const RunResult text = run("env info \"" + exr_.string() + "\"");
+  ASSERT_EQ(text.exit_code, 0);
+  EXPECT_NE(text.out.find("128 x 64"), std::string::npos) << text.out;
+}
+
+TEST_F(EnvCli, MissingFileExitsOneNamingIt) {
+  const fs::path missing = dir_ / "no_such_env.exr";
+  for (const std::string& args : {"env info \"" + missing.string() + "\"",
+                                  "env cubemap \"" + missing.string() + "\" --res 4 --out \"" +
+                                      (dir_ / "x.exr").string() + "\""}) {
+    const RunResult r = run(args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_NE(r.err.find("no_such_env.exr"), std::string::npos) << r.err;
+  }
+  // Not an EXR at all.
+  std::ofstream(dir_ / "text.exr") << "hello";
+  const RunResult r = run("env info \"" + (dir_ / "text.exr").string() + "\"");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("text.exr"), std::string::npos) << r.err;
+}
+
+TEST_F(EnvCli, HelpAndBadOptions) {
+  for (const char* cmd : {"env --help", "env info --help", "env cubemap --help"}) {
+    const RunResult r = run(cmd);
+    EXPECT_EQ(r.exit_code, 0) << cmd;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd << ": " << r.out;
+  }
+  EXPECT_NE(run("env cubemap --help").out.find("--preview"), std::string::npos);
+  // --res out of range and a missing --out are usage errors (non-zero, nothing written).
+  EXPECT_NE(run("env cubemap \"" + exr_.string() + "\" --res 0 --out \"" +
+                (dir_ / "y.exr").string() + "\"")
+                .exit_code,
+            0);
+  EXPECT_NE(run("env cubemap \"" + exr_.string() + "\" --res 4").exit_code, 0);
+  EXPECT_FALSE(fs::exists(dir_ / "y.exr"));
+}
+
+}  // namespace
+}  // namespace prt

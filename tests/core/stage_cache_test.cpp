@@ -1,0 +1,217 @@
+// The stage cache: a miss computes and stores, a hit loads without computing, an unusable
+// cached file is reported and recomputed (never used), refresh/off modes, unwritable caches.
+#include "prtlab/stage_cache.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "prtlab/log.h"
+
+namespace prt {
+namespace {
+
+namespace fs = std::filesystem;
+
+class StageCacheTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    root_ = fs::temp_directory_path() /
+            fmt::format("prtlab_stage_cache_test_{}_{}", ::getpid(), info->name());
+    fs::remove_all(root_);
+    saved_level_ = log_level();
+    set_log_level(LogLevel::kError);  // the warnings are expected; they are counted below
+  }
+  void TearDown() override {
+    set_log_level(saved_level_);
+    std::error_code ec;
+    fs::remove_all(root_, ec);
+  }
+
+  // A stand-in stage: its result is a vector derived from `seed`; `computed` counts calls.
+  StageCache::Compute compute(int seed) {
+    return [this, seed] {
+      ++computed_;
+      std::vector<float> v(64);
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(seed) + 0.125f * i;
+      v[7] = std::bit_cast<float>(0x7fc00000u + static_cast<std::uint32_t>(seed));  // a NaN payload
+      ArchiveWriter w("test-stage", 1);
+      w.add_meta("seed", seed);
+      w.add_section("values", std::move(v));
+      return w;
+    };
+  }
+  static std::vector<float> load(const ArchiveReader& r) {
+    r.expect_kind("test-stage", 1);
+    return r.section<float>("values", 64);
+  }
+  static std::vector<float> expected(int seed) {
+    std::vector<float> v(64);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(seed) + 0.125f * i;
+    v[7] = std::bit_cast<float>(0x7fc00000u + static_cast<std::uint32_t>(seed));
+    return v;
+  }
+  static bool bit_equal(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+  }
+  static Hash128 key(int k) { return Hasher().add("test-stage").add(1).add(k).digest(); }
+
+  void corrupt_byte(const fs::path& file, std::uint64_t offset) {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(static_cast<std::streamoff>(offset));
+    char c = 0;
+    f.read(&c, 1);
+    c = static_cast<char>(c ^ 0x40);
+    f.seekp(static_cast<std::streamoff>(offset));
+    f.write(&c, 1);
+  }
+
+  fs::path root_;
+  int computed_ = 0;
+  LogLevel saved_level_ = LogLevel::kInfo;
+};
+
+TEST_F(StageCacheTest, PathLayoutAndStageNames) {
+  const StageCache cache(root_);
+  const Hash128 k = key(1);
+  EXPECT_EQ(cache.path_for("transfer", k), root_ / "transfer" / (k.hex() + ".prt"));
+  EXPECT_EQ(cache.path_for("sh-transfer.v2_x", k).parent_path().filename(), "sh-transfer.v2_x");
+  for (const char* bad : {"", "..", ".hidden", "a/b", "../escape", "Transfer", "x y", "é"})
+    EXPECT_THROW((void)cache.path_for(bad, k), ParameterError) << "'" << bad << "'";
+  EXPECT_THROW((void)cache.path_for(std::string(65, 'a'), k), ParameterError);
+  EXPECT_FALSE(cache.contains("transfer", k));
+}
+
+TEST_F(StageCacheTest, DefaultRootIsPrtlabCache) {
+  const char* old = std::getenv("PRTLAB_CACHE");
+  const std::string saved = old ? old : "";
+  ::setenv("PRTLAB_CACHE", root_.c_str(), 1);
+  const StageCache cache;
+  EXPECT_EQ(cache.root(), root_);
+  if (old) ::setenv("PRTLAB_CACHE", saved.c_str(), 1);
+  else ::unsetenv("PRTLAB_CACHE");
+}
+
+TEST_F(StageCacheTest, MissComputesAndStoresThenHitLoadsWithoutComputing) {
+  StageCache cache(root_);
+  const auto first = cache.get_or_compute("stage", key(1), compute(1), load);
+  EXPECT_EQ(computed_, 1);
+  EXPECT_TRUE(bit_equal(first, expected(1)));
+  EXPECT_TRUE(cache.contains("stage", key(1)));
+  // Stored atomically: the stage directory holds the entry and nothing else.
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(root_ / "stage")) files.push_back(e.path());
+  EXPECT_EQ(files, std::vector<fs::path>{cache.path_for("stage", key(1))});
+  // The stored archive names its stage and key.
+  const ArchiveReader stored = ArchiveReader::open(cache.path_for("stage", key(1)));
+  EXPECT_EQ(stored.meta().at("stage_cache").at("key"), key(1).hex());
+
+  const auto second = cache.get_or_compute("stage", key(1), compute(1), load);
+  EXPECT_EQ(computed_, 1) << "a hit must not compute";
+  EXPECT_TRUE(bit_equal(second, first));
+  // A fresh cache object (a new process) hits as well.
+  StageCache again(root_);
+  (void)again.get_or_compute("stage", key(1), compute(1), load);
+  EXPECT_EQ(computed_, 1);
+  EXPECT_EQ(cache.stats().hits, 1);
+  EXPECT_EQ(cache.stats().misses, 1);
+  EXPECT_EQ(cache.stats().corrupt, 0);
+}
+
+TEST_F(StageCacheTest, DifferentKeysAndStagesDoNotCollide) {
+  StageCache cache(root_);
+  for (int k = 0; k < 5; ++k)
+    EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(k), compute(k), load), expected(k)));
+  EXPECT_TRUE(bit_equal(cache.get_or_compute("other", key(0), compute(100), load), expected(100)));
+  EXPECT_EQ(computed_, 6);
+  // Every entry still holds its own value.
+  for (int k = 0; k < 5; ++k)
+    EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(k), compute(-1), load), expected(k)));
+  EXPECT_EQ(computed_, 6);
+}
+
+TEST_F(StageCacheTest, CorruptOrForeignCachedFilesAreRecomputedWithAWarning) {
+  StageCache cache(root_);
+  const fs::path file = cache.path_for("stage", key(1));
+  (void)cache.get_or_compute("stage", key(1), compute(1), load);
+  const auto size = fs::file_size(file);
+  const std::vector<std::function<void()>> damages = {
+      [&] { corrupt_byte(file, size / 2); },                             // bit rot in the payload
+      [&] { fs::resize_file(file, size - 20); },                         // truncated
+      [&] { std::ofstream(file, std::ios::trunc) << "not an archive"; },  // foreign file
+      [&] {  // a valid archive of another key, copied into this key's place
+        fs::remove(file);
+        (void)cache.get_or_compute("stage", key(2), compute(2), load);
+        fs::copy_file(cache.path_for("stage", key(2)), file);
+      },
+      [&] {  // a valid archive of another kind (the load refuses it)
+        ArchiveWriter w("other-kind", 1);
+        w.add_meta("stage_cache", {{"stage", "stage"}, {"key", key(1).hex()}});
+        w.write(file);
+      },
+  };
+  for (std::size_t i = 0; i < damages.size(); ++i) {
+    damages[i]();
+    const int computed_before = computed_;
+    const int warnings_before = warning_count();
+    const auto v = cache.get_or_compute("stage", key(1), compute(1), load);
+    EXPECT_TRUE(bit_equal(v, expected(1))) << "damage " << i;
+    EXPECT_EQ(computed_, computed_before + 1) << "damage " << i;
+    EXPECT_EQ(warning_count(), warnings_before + 1) << "damage " << i;
+    // The entry was repaired: the next call hits.
+    (void)cache.get_or_compute("stage", key(1), compute(1), load);
+    EXPECT_EQ(computed_, computed_before + 1) << "damage " << i;
+  }
+  EXPECT_EQ(cache.stats().corrupt, static_cast<int>(damages.size()));
+}
+
+TEST_F(StageCacheTest, RefreshRecomputesAndOffNeverTouchesTheCache) {
+  StageCache cache(root_);
+  (void)cache.get_or_compute("stage", key(1), compute(1), load);
+  // Refresh: computes even though present, and the new result replaces the old.
+  const auto refreshed = cache.get_or_compute("stage", key(1), compute(2), load, CacheMode::kRefresh);
+  EXPECT_EQ(computed_, 2);
+  EXPECT_TRUE(bit_equal(refreshed, expected(2)));
+  EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(1), compute(3), load), expected(2)));
+  EXPECT_EQ(computed_, 2);
+  // Off: computes, does not read the cached entry, writes nothing.
+  const auto off = cache.get_or_compute("stage", key(1), compute(4), load, CacheMode::kOff);
+  EXPECT_TRUE(bit_equal(off, expected(4)));
+  const auto off_new = cache.get_or_compute("stage", key(9), compute(9), load, CacheMode::kOff);
+  EXPECT_TRUE(bit_equal(off_new, expected(9)));
+  EXPECT_EQ(computed_, 4);
+  EXPECT_FALSE(cache.contains("stage", key(9)));
+  EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(1), compute(5), load), expected(2)));
+}
+
+TEST_F(StageCacheTest, UnwritableCacheStillReturnsTheResult) {
+  fs::create_directories(root_);
+  std::ofstream(root_ / "file") << "x";
+  StageCache cache(root_ / "file");  // the root is a regular file: nothing can be stored
+  const int warnings_before = warning_count();
+  const auto v = cache.get_or_compute("stage", key(1), compute(1), load);
+  EXPECT_TRUE(bit_equal(v, expected(1)));
+  EXPECT_EQ(warning_count(), warnings_before + 1);
+  EXPECT_EQ(cache.stats().write_failures, 1);
+}
+
+TEST_F(StageCacheTest, ErrorsOfAFreshComputationPropagate) {
+  StageCache cache(root_);
+  const StageCache::Compute failing = [] () -> ArchiveWriter { throw ParameterError("bad parameter"); };
+  EXPECT_THROW((void)cache.get_or_compute("stage", key(1), failing, load), ParameterError);
+  EXPECT_FALSE(cache.contains("stage", key(1)));
+  // A load that refuses what compute just produced is a bug in the stage, not a cache problem.
+  const auto wrong_load = [](const ArchiveReader& r) { return r.section<double>("values"); };
+  EXPECT_THROW((void)cache.get_or_compute("stage", key(2), compute(2), wrong_load), InputError);
+}
+
+}  // namespace
+}  // namespace prt
