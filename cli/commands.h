@@ -24,5 +24,6 @@ void set_command_line(int argc, char** argv);
 
 void add_scene_commands(CLI::App& app);
 void add_env_commands(CLI::App& app);
+void add_transfer_commands(CLI::App& app);
 
 }  // namespace prt::cli

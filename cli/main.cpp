@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
 
   cli::add_scene_commands(app);
   cli::add_env_commands(app);
+  cli::add_transfer_commands(app);
 
   try {
     app.parse(argc, argv);

@@ -285,10 +285,11 @@ std::shared_ptr<const std::byte> load_file(const std::filesystem::path& file, st
           [size](const std::byte* q) { ::munmap(const_cast<std::byte*>(q), size); });
     }
   }
-  std::vector<std::byte> bytes(size);
+  std::shared_ptr<std::byte[]> buffer =
+      std::make_shared_for_overwrite<std::byte[]>(std::max<std::uint64_t>(size, 1));
   std::uint64_t got = 0;
   while (got < size) {
-    const ssize_t n = ::read(fd.get(), bytes.data() + got, size - got);
+    const ssize_t n = ::read(fd.get(), buffer.get() + got, size - got);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) throw InputError(file, fmt::format("read error: {}", std::strerror(errno)));
     if (n == 0) break;
@@ -297,7 +298,7 @@ std::shared_ptr<const std::byte> load_file(const std::filesystem::path& file, st
   if (got != size)
     throw InputError(file, fmt::format("read {} of {} bytes (the file changed while being read)",
                                        got, size));
-  return heap_copy(bytes);
+  return std::shared_ptr<const std::byte>(buffer, buffer.get());
 }
 
 }  // namespace

@@ -32,7 +32,9 @@ std::uint32_t float_key(float f) {
   return u;
 }
 
-Vec3d to_d(const Vec3& v) { return Vec3d(v); }
+Vec3d to_d(const Vec3& v) {
+  return Vec3d(v);
+}
 
 Vec3d normalized_or_zero(const Vec3d& v) {
   const double len = glm::length(v);
@@ -53,7 +55,8 @@ Aabb Mesh::bounds() const {
 
 LocalFrame Mesh::frame(std::size_t v) const {
   PRT_CHECK(v < normals.size(), "Mesh::frame({}) needs normals ({} present)", v, normals.size());
-  if (v < tangents.size()) return LocalFrame::from_normal_tangent(to_d(normals[v]), to_d(tangents[v]));
+  if (v < tangents.size())
+    return LocalFrame::from_normal_tangent(to_d(normals[v]), to_d(tangents[v]));
   return LocalFrame::from_normal(to_d(normals[v]));
 }
 
@@ -80,7 +83,8 @@ void Mesh::append(const Mesh& other, std::uint16_t part) {
   if (!this_empty && uvs.empty() && src->has_uvs()) uvs.assign(positions.size(), Vec2(0.f));
 
   positions.insert(positions.end(), src->positions.begin(), src->positions.end());
-  if (!normals.empty() || this_empty) normals.insert(normals.end(), src->normals.begin(), src->normals.end());
+  if (!normals.empty() || this_empty)
+    normals.insert(normals.end(), src->normals.begin(), src->normals.end());
   if (!tangents.empty() || this_empty)
     tangents.insert(tangents.end(), src->tangents.begin(), src->tangents.end());
   if (has_uvs()) {
@@ -113,9 +117,8 @@ std::vector<std::uint32_t> position_representatives(const Mesh& mesh) {
   first.reserve(mesh.vertex_count());
   for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
     const Vec3& p = mesh.positions[v];
-    const auto [it, inserted] =
-        first.try_emplace(PositionKey{float_key(p.x), float_key(p.y), float_key(p.z)},
-                          static_cast<std::uint32_t>(v));
+    const auto [it, inserted] = first.try_emplace(
+        PositionKey{float_key(p.x), float_key(p.y), float_key(p.z)}, static_cast<std::uint32_t>(v));
     rep[v] = it->second;
   }
   return rep;

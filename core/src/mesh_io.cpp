@@ -1,10 +1,10 @@
 #include "prtlab/mesh_io.h"
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -92,7 +92,9 @@ class LineReader {
   bool at_end() const { return pos_ >= text_.size(); }
 
  private:
-  static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+  static bool is_space(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+  }
   static void split(std::string_view s, std::vector<std::string_view>& out) {
     std::size_t i = 0;
     while (i < s.size()) {
@@ -115,7 +117,8 @@ std::optional<double> parse_double(std::string_view token) {
   if (!token.empty() && token.front() == '+') ++first;  // from_chars rejects a leading '+'
   const auto [ptr, ec] = std::from_chars(first, token.data() + token.size(), v);
   // Out-of-range values parse as +-inf so that they are reported as infinite coordinates.
-  if (ec == std::errc::result_out_of_range) return first < ptr && *first == '-' ? -HUGE_VAL : HUGE_VAL;
+  if (ec == std::errc::result_out_of_range)
+    return first < ptr && *first == '-' ? -HUGE_VAL : HUGE_VAL;
   if (ec != std::errc() || ptr != token.data() + token.size()) return std::nullopt;
   return v;
 }
@@ -178,8 +181,8 @@ Mesh read_off(const fs::path& file, std::string_view text) {
   const auto nv = counts.size() >= 1 ? parse_int(counts[0]) : std::nullopt;
   const auto nf = counts.size() >= 2 ? parse_int(counts[1]) : std::nullopt;
   if (!nv || !nf || *nv < 0 || *nf < 0)
-    throw InputError(file, fmt::format("line {}: expected the vertex and face counts after 'OFF'",
-                                       header_line));
+    throw InputError(
+        file, fmt::format("line {}: expected the vertex and face counts after 'OFF'", header_line));
   constexpr std::int64_t kMaxCount = std::numeric_limits<std::uint32_t>::max();
   if (*nv > kMaxCount || *nf > kMaxCount)
     throw InputError(file, fmt::format("line {}: counts {} and {} are beyond 32-bit indices",
@@ -200,9 +203,11 @@ Mesh read_off(const fs::path& file, std::string_view text) {
   const std::size_t ncoords = homogeneous ? 4 : 3;
   const std::size_t nvalues = ncoords + (has_normal ? 3 : 0) + (has_uv ? 2 : 0);
   for (std::size_t i = 0; i < V; ++i) {
-    if (!reader.next(line)) throw truncated(fmt::format("after {} vert{}", i, i == 1 ? "ex" : "ices"));
+    if (!reader.next(line))
+      throw truncated(fmt::format("after {} vert{}", i, i == 1 ? "ex" : "ices"));
     if (line.tokens.size() < nvalues) {
-      if (reader.at_end()) throw truncated(fmt::format("inside vertex {} (line {})", i, line.number));
+      if (reader.at_end())
+        throw truncated(fmt::format("inside vertex {} (line {})", i, line.number));
       throw InputError(file, fmt::format("vertex {} (line {}) has {} values, expected at least {}",
                                          i, line.number, line.tokens.size(), nvalues));
     }
@@ -216,21 +221,26 @@ Mesh read_off(const fs::path& file, std::string_view text) {
     }
     if (homogeneous) {
       if (c[3] == 0.0)
-        throw InputError(file, fmt::format("vertex {} (line {}) has homogeneous w = 0", i, line.number));
+        throw InputError(file,
+                         fmt::format("vertex {} (line {}) has homogeneous w = 0", i, line.number));
       for (int k = 0; k < 3; ++k) c[k] /= c[3];
     }
-    if (const std::string problem = non_finite_problem({c[0], c[1], c[2]}, "coordinate"); !problem.empty())
+    if (const std::string problem = non_finite_problem({c[0], c[1], c[2]}, "coordinate");
+        !problem.empty())
       throw InputError(file, fmt::format("vertex {} (line {}) {}", i, line.number, problem));
-    mesh.positions[i] = Vec3(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]));
+    mesh.positions[i] =
+        Vec3(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]));
     if (has_uv) {
       // Texture coordinates come last on the line (after optional colours of varying count).
       const std::size_t n = line.tokens.size();
       const auto u = parse_double(line.tokens[n - 2]);
       const auto v = parse_double(line.tokens[n - 1]);
       if (!u || !v)
-        throw InputError(file, fmt::format("vertex {} (line {}): texture coordinates are not numbers",
-                                           i, line.number));
-      if (const std::string problem = non_finite_problem({*u, *v}, "texture coordinate"); !problem.empty())
+        throw InputError(file,
+                         fmt::format("vertex {} (line {}): texture coordinates are not numbers", i,
+                                     line.number));
+      if (const std::string problem = non_finite_problem({*u, *v}, "texture coordinate");
+          !problem.empty())
         throw InputError(file, fmt::format("vertex {} (line {}) {}", i, line.number, problem));
       mesh.uvs[i] = Vec2(static_cast<float>(*u), static_cast<float>(*v));
     }
@@ -239,12 +249,14 @@ Mesh read_off(const fs::path& file, std::string_view text) {
   mesh.indices.reserve(3 * F);
   std::vector<std::uint32_t> face;
   for (std::size_t f = 0; f < F; ++f) {
-    if (!reader.next(line)) throw truncated(fmt::format("after all {} vertices and {} face{}", V, f, f == 1 ? "" : "s"));
+    if (!reader.next(line))
+      throw truncated(fmt::format("after all {} vertices and {} face{}", V, f, f == 1 ? "" : "s"));
     const auto n = parse_int(line.tokens[0]);
     if (!n || *n < 0)
       throw InputError(file, fmt::format("face {} (line {}): {} is not a vertex count", f,
                                          line.number, quote(line.tokens[0])));
-    if (*n == 0) throw InputError(file, fmt::format("face {} (line {}) has no vertices", f, line.number));
+    if (*n == 0)
+      throw InputError(file, fmt::format("face {} (line {}) has no vertices", f, line.number));
     const auto count = static_cast<std::size_t>(*n);
     if (line.tokens.size() < count + 1) {
       if (reader.at_end()) throw truncated(fmt::format("inside face {} (line {})", f, line.number));
@@ -286,9 +298,12 @@ void prescan_obj(const fs::path& file, std::string_view text) {
     Line line;
     while (reader.next(line)) {
       const std::string_view k = line.tokens[0];
-      if (k == "v") ++totals[0];
-      else if (k == "vt") ++totals[1];
-      else if (k == "vn") ++totals[2];
+      if (k == "v")
+        ++totals[0];
+      else if (k == "vt")
+        ++totals[1];
+      else if (k == "vn")
+        ++totals[2];
     }
   }
   static constexpr const char* kWhat[3] = {"vertex", "texture coordinate", "normal"};
@@ -307,18 +322,21 @@ void prescan_obj(const fs::path& file, std::string_view text) {
       for (int a = 0; a < 3; ++a) {
         const auto value = parse_double(line.tokens[static_cast<std::size_t>(a) + 1]);
         if (!value)
-          throw InputError(file, fmt::format("vertex {} (line {}): {} is not a number", i,
-                                             line.number, quote(line.tokens[static_cast<std::size_t>(a) + 1])));
+          throw InputError(file,
+                           fmt::format("vertex {} (line {}): {} is not a number", i, line.number,
+                                       quote(line.tokens[static_cast<std::size_t>(a) + 1])));
         c[a] = *value;
       }
-      if (const std::string problem = non_finite_problem({c[0], c[1], c[2]}, "coordinate"); !problem.empty())
+      if (const std::string problem = non_finite_problem({c[0], c[1], c[2]}, "coordinate");
+          !problem.empty())
         throw InputError(file, fmt::format("vertex {} (line {}) {}", i, line.number, problem));
     } else if (k == "vt") {
       const std::size_t i = seen[1]++;
       for (std::size_t a = 1; a < std::min<std::size_t>(line.tokens.size(), 3); ++a) {
         const auto value = parse_double(line.tokens[a]);
         if (value && std::isnan(*value))
-          throw InputError(file, fmt::format("texture coordinate {} (line {}) is NaN", i, line.number));
+          throw InputError(file,
+                           fmt::format("texture coordinate {} (line {}) is NaN", i, line.number));
       }
     } else if (k == "vn") {
       ++seen[2];
@@ -356,18 +374,21 @@ void check_raw_scene(const fs::path& file, const aiScene& scene) {
     const aiMesh& mesh = *scene.mMeshes[m];
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
       const aiVector3D& p = mesh.mVertices[v];
-      if (const std::string problem = non_finite_problem({p.x, p.y, p.z}, "coordinate"); !problem.empty())
+      if (const std::string problem = non_finite_problem({p.x, p.y, p.z}, "coordinate");
+          !problem.empty())
         throw InputError(file, fmt::format("mesh {}, vertex {} {}", m, v, problem));
       if (mesh.HasTextureCoords(0)) {
         const aiVector3D& uv = mesh.mTextureCoords[0][v];
         if (std::isnan(uv.x) || std::isnan(uv.y))
-          throw InputError(file, fmt::format("mesh {}, vertex {} has a NaN texture coordinate", m, v));
+          throw InputError(file,
+                           fmt::format("mesh {}, vertex {} has a NaN texture coordinate", m, v));
       }
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices == 0 || face.mIndices == nullptr)
-        throw InputError(file, fmt::format("mesh {}, face {} has no vertices (a truncated file?)", m, f));
+        throw InputError(file,
+                         fmt::format("mesh {}, face {} has no vertices (a truncated file?)", m, f));
       for (unsigned k = 0; k < face.mNumIndices; ++k)
         if (face.mIndices[k] >= mesh.mNumVertices)
           throw InputError(file, fmt::format("mesh {}, face {} references vertex {} but the mesh "
@@ -397,17 +418,20 @@ Mesh read_with_assimp(const fs::path& file) {
   // Import without post-processing first: our checks must see the raw indices, since
   // post-processing steps index vertex arrays without bounds checks.
   const aiScene* scene = importer.ReadFile(file.string(), 0);
-  if (!scene) throw InputError(file, fmt::format("assimp cannot import it: {}", importer.GetErrorString()));
+  if (!scene)
+    throw InputError(file, fmt::format("assimp cannot import it: {}", importer.GetErrorString()));
   check_raw_scene(file, *scene);
   // JoinIdenticalVertices compares every attribute (UVs included), so UV seams stay split.
   scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
-  if (!scene) throw InputError(file, fmt::format("assimp cannot import it: {}", importer.GetErrorString()));
+  if (!scene)
+    throw InputError(file, fmt::format("assimp cannot import it: {}", importer.GetErrorString()));
 
   std::vector<Piece> pieces;
   if (scene->mRootNode) {
     collect_pieces(*scene, *scene->mRootNode, aiMatrix4x4(), pieces, 0);
   } else {
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) pieces.push_back({scene->mMeshes[m], aiMatrix4x4()});
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+      pieces.push_back({scene->mMeshes[m], aiMatrix4x4()});
   }
   bool any_uv = false;
   for (const Piece& piece : pieces) any_uv = any_uv || piece.mesh->HasTextureCoords(0);
@@ -431,13 +455,15 @@ Mesh read_with_assimp(const fs::path& file) {
     for (unsigned f = 0; f < m.mNumFaces; ++f) {
       const aiFace& face = m.mFaces[f];
       const auto at = [&](unsigned k) {
-        return static_cast<std::uint32_t>(offset + face.mIndices[std::min(k, face.mNumIndices - 1)]);
+        return static_cast<std::uint32_t>(offset +
+                                          face.mIndices[std::min(k, face.mNumIndices - 1)]);
       };
       // Points and lines become degenerate triangles so that validation counts them.
       if (face.mNumIndices <= 3) {
         out.indices.insert(out.indices.end(), {at(0), at(1), at(2)});
       } else {
-        for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) out.indices.insert(out.indices.end(), {at(0), at(k), at(k + 1)});
+        for (unsigned k = 1; k + 1 < face.mNumIndices; ++k)
+          out.indices.insert(out.indices.end(), {at(0), at(k), at(k + 1)});
       }
     }
   }
@@ -469,7 +495,8 @@ void validate_mesh(Mesh& mesh, const fs::path& source, MeshLoadReport* report) {
   if (V == 0) throw InputError(source, "empty mesh: no vertices");
   if (mesh.indices.empty()) throw InputError(source, "empty mesh: no triangles");
   if (mesh.indices.size() % 3 != 0)
-    throw InputError(source, fmt::format("index count {} is not a multiple of 3", mesh.indices.size()));
+    throw InputError(source,
+                     fmt::format("index count {} is not a multiple of 3", mesh.indices.size()));
   const auto check_size = [&](std::size_t n, std::size_t expected, const char* what) {
     if (n != 0 && n != expected)
       throw InputError(source, fmt::format("has {} {} for {} elements", n, what, expected));
@@ -493,14 +520,16 @@ void validate_mesh(Mesh& mesh, const fs::path& source, MeshLoadReport* report) {
   for (std::size_t t = 0; t < T; ++t)
     for (int c = 0; c < 3; ++c)
       if (mesh.indices[3 * t + static_cast<std::size_t>(c)] >= V)
-        throw InputError(source, fmt::format("triangle {} references vertex {} but the mesh has {} vertices",
-                                             t, mesh.indices[3 * t + static_cast<std::size_t>(c)], V));
+        throw InputError(
+            source, fmt::format("triangle {} references vertex {} but the mesh has {} vertices", t,
+                                mesh.indices[3 * t + static_cast<std::size_t>(c)], V));
 
   // Degenerate triangles: a repeated index, or exactly zero area. The cross product of float
   // positions is exact in double up to the last subtraction, so "zero" means collinear.
   std::size_t dropped = 0, first = 0, kept = 0;
   for (std::size_t t = 0; t < T; ++t) {
-    const std::uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
+    const std::uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1],
+                        c = mesh.indices[3 * t + 2];
     bool degenerate = a == b || b == c || a == c;
     if (!degenerate) {
       const Vec3d pa(mesh.positions[a]);
@@ -520,8 +549,10 @@ void validate_mesh(Mesh& mesh, const fs::path& source, MeshLoadReport* report) {
   if (dropped > 0) {
     mesh.indices.resize(3 * kept);
     if (!mesh.triangle_part.empty()) mesh.triangle_part.resize(kept);
-    log_warn("{}: dropped {} degenerate triangle{} (repeated vertex or zero area); the first is triangle {}",
-             source.string(), dropped, dropped == 1 ? "" : "s", first);
+    log_warn(
+        "{}: dropped {} degenerate triangle{} (repeated vertex or zero area); the first is "
+        "triangle {}",
+        source.string(), dropped, dropped == 1 ? "" : "s", first);
     if (kept == 0)
       throw InputError(source, fmt::format("empty mesh: all {} triangles are degenerate", T));
   }
@@ -575,18 +606,24 @@ void save_mesh_obj(const Mesh& mesh, const fs::path& file) {
   fmt::format_to(std::back_inserter(out), "# prtlab mesh: {} vertices, {} triangles\n",
                  mesh.vertex_count(), mesh.triangle_count());
   // fmt's default float format is the shortest string that reads back to the same float.
-  for (const Vec3& p : mesh.positions) fmt::format_to(std::back_inserter(out), "v {} {} {}\n", p.x, p.y, p.z);
+  for (const Vec3& p : mesh.positions)
+    fmt::format_to(std::back_inserter(out), "v {} {} {}\n", p.x, p.y, p.z);
   for (const Vec2& uv : mesh.uvs) fmt::format_to(std::back_inserter(out), "vt {} {}\n", uv.x, uv.y);
-  for (const Vec3& n : mesh.normals) fmt::format_to(std::back_inserter(out), "vn {} {} {}\n", n.x, n.y, n.z);
+  for (const Vec3& n : mesh.normals)
+    fmt::format_to(std::back_inserter(out), "vn {} {} {}\n", n.x, n.y, n.z);
   const bool uv = mesh.has_uvs(), nrm = !mesh.normals.empty();
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     out.push_back('f');
     for (int c = 0; c < 3; ++c) {
       const std::uint32_t i = mesh.indices[3 * t + static_cast<std::size_t>(c)] + 1;
-      if (uv && nrm) fmt::format_to(std::back_inserter(out), " {}/{}/{}", i, i, i);
-      else if (uv) fmt::format_to(std::back_inserter(out), " {}/{}", i, i);
-      else if (nrm) fmt::format_to(std::back_inserter(out), " {}//{}", i, i);
-      else fmt::format_to(std::back_inserter(out), " {}", i);
+      if (uv && nrm)
+        fmt::format_to(std::back_inserter(out), " {}/{}/{}", i, i, i);
+      else if (uv)
+        fmt::format_to(std::back_inserter(out), " {}/{}", i, i);
+      else if (nrm)
+        fmt::format_to(std::back_inserter(out), " {}//{}", i, i);
+      else
+        fmt::format_to(std::back_inserter(out), " {}", i);
     }
     out.push_back('\n');
   }

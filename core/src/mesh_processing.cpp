@@ -29,8 +29,8 @@ std::uint32_t bits(float f) {
   return u;
 }
 
-/// Keeps the vertices `keep` marks (in their order), remapping indices; parts and per-vertex
-/// attributes follow. Normals and tangents are dropped (callers recompute them).
+/// Keeps the vertices that `indices` use (in their order) and remaps the indices; UVs follow,
+/// `parts` becomes the triangle parts. Normals and tangents are dropped (callers recompute).
 Mesh compact_vertices(const Mesh& mesh, std::vector<std::uint32_t> indices,
                       std::vector<std::uint16_t> parts) {
   std::vector<std::uint32_t> remap(mesh.vertex_count(), kNone);
@@ -144,7 +144,8 @@ struct Simplified {
 
 class Simplifier {
  public:
-  Simplifier(const Mesh& mesh, bool sloppy) : mesh_(mesh), sloppy_(sloppy), mark_(mesh.vertex_count(), 0) {}
+  Simplifier(const Mesh& mesh, bool sloppy)
+      : mesh_(mesh), sloppy_(sloppy), mark_(mesh.vertex_count(), 0) {}
 
   int runs() const { return runs_; }
 
@@ -155,10 +156,12 @@ class Simplifier {
     const float* pos = &mesh_.positions[0].x;
     // target_error 1 (the whole extent): the vertex count, not the error, decides where to stop.
     const std::size_t n =
-        sloppy_ ? meshopt_simplifySloppy(s.indices.data(), mesh_.indices.data(), mesh_.indices.size(), pos,
-                                         mesh_.vertex_count(), sizeof(Vec3), target_indices, 1.0f, nullptr)
-                : meshopt_simplify(s.indices.data(), mesh_.indices.data(), mesh_.indices.size(), pos,
-                                   mesh_.vertex_count(), sizeof(Vec3), target_indices, 1.0f, 0, nullptr);
+        sloppy_ ? meshopt_simplifySloppy(s.indices.data(), mesh_.indices.data(),
+                                         mesh_.indices.size(), pos, mesh_.vertex_count(),
+                                         sizeof(Vec3), target_indices, 1.0f, nullptr)
+                : meshopt_simplify(s.indices.data(), mesh_.indices.data(), mesh_.indices.size(),
+                                   pos, mesh_.vertex_count(), sizeof(Vec3), target_indices, 1.0f, 0,
+                                   nullptr);
     s.indices.resize(n);
     remove_fins(s.indices);
     ++stamp_;
@@ -179,7 +182,9 @@ class Simplifier {
   int runs_ = 0;
 };
 
-std::size_t diff(std::size_t a, std::size_t b) { return a > b ? a - b : b - a; }
+std::size_t diff(std::size_t a, std::size_t b) {
+  return a > b ? a - b : b - a;
+}
 
 /// Searches the target index count whose result has `target` vertices. The vertex count grows
 /// with the index target (about one vertex per six indices on a closed mesh) in small, slightly
@@ -219,12 +224,13 @@ Simplified search_target(const Mesh& mesh, std::size_t target, bool sloppy) {
       guess = lo + round3(static_cast<double>(hi - lo) / 2.0);
       repeats = 0;
     } else {
-      guess = lo + round3((static_cast<double>(target) - v_lo) * static_cast<double>(hi - lo) / (v_hi - v_lo));
+      guess = lo + round3((static_cast<double>(target) - v_lo) * static_cast<double>(hi - lo) /
+                          (v_hi - v_lo));
     }
   }
   if (!have_best) best = simplifier.run(hi);
-  log_debug("decimation{}: {} vertices after {} simplifications (target {})", sloppy ? " (sloppy)" : "",
-            best.vertices, simplifier.runs(), target);
+  log_debug("decimation{}: {} vertices after {} simplifications (target {})",
+            sloppy ? " (sloppy)" : "", best.vertices, simplifier.runs(), target);
   return best;
 }
 
@@ -256,7 +262,8 @@ Mesh weld_core(const Mesh& mesh, WeldKey key) {
     const Vec3& p = mesh.positions[v];
     WeldKeyValue k{{bits(p.x), bits(p.y), bits(p.z)}, {0, 0}};
     if (use_uv) k.uv[0] = bits(mesh.uvs[v].x), k.uv[1] = bits(mesh.uvs[v].y);
-    const auto [it, inserted] = first.try_emplace(k, static_cast<std::uint32_t>(welded.positions.size()));
+    const auto [it, inserted] =
+        first.try_emplace(k, static_cast<std::uint32_t>(welded.positions.size()));
     if (inserted) {
       welded.positions.push_back(p);
       if (use_uv) welded.uvs.push_back(mesh.uvs[v]);
@@ -301,20 +308,23 @@ Mesh weld_vertices(const Mesh& mesh, WeldKey key) {
 
 Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, double tolerance) {
   if (target_vertices < 4)
-    throw ParameterError(fmt::format("cannot decimate to {} vertices: the target must be at least 4",
-                                     target_vertices));
+    throw ParameterError(fmt::format(
+        "cannot decimate to {} vertices: the target must be at least 4", target_vertices));
   if (target_vertices > mesh.vertex_count())
-    throw ParameterError(fmt::format("cannot decimate a mesh of {} vertices up to {} (subdivide, or use "
-                                     "resample_to_vertex_count)",
-                                     mesh.vertex_count(), target_vertices));
-  if (!(tolerance >= 0.0)) throw ParameterError(fmt::format("decimation tolerance {} must be >= 0", tolerance));
+    throw ParameterError(
+        fmt::format("cannot decimate a mesh of {} vertices up to {} (subdivide, or use "
+                    "resample_to_vertex_count)",
+                    mesh.vertex_count(), target_vertices));
+  if (!(tolerance >= 0.0))
+    throw ParameterError(fmt::format("decimation tolerance {} must be >= 0", tolerance));
   const double allowed = tolerance * static_cast<double>(target_vertices);
 
   Mesh work = weld_core(mesh, WeldKey::kPositionAndUv);
   const std::vector<std::uint16_t> part_of = split_vertices_by_part(work);
   if (work.vertex_count() <= target_vertices) {
     if (static_cast<double>(target_vertices - work.vertex_count()) > allowed)
-      log_warn("welding left {} vertices, below the decimation target {}", work.vertex_count(), target_vertices);
+      log_warn("welding left {} vertices, below the decimation target {}", work.vertex_count(),
+               target_vertices);
     finish_attributes(work);
     return work;
   }
@@ -322,21 +332,26 @@ Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, dou
   Simplified s = search_target(work, target_vertices, /*sloppy=*/false);
   if (static_cast<double>(diff(s.vertices, target_vertices)) > allowed) {
     Simplified sloppy = search_target(work, target_vertices, /*sloppy=*/true);
-    log_warn("meshopt_simplify reached {} vertices, not {} (locked borders or topology); "
-             "meshopt_simplifySloppy reached {}{}",
-             s.vertices, target_vertices, sloppy.vertices,
-             diff(sloppy.vertices, target_vertices) < diff(s.vertices, target_vertices) ? " and is used" : "");
-    if (diff(sloppy.vertices, target_vertices) < diff(s.vertices, target_vertices)) s = std::move(sloppy);
+    log_warn(
+        "meshopt_simplify reached {} vertices, not {} (locked borders or topology); "
+        "meshopt_simplifySloppy reached {}{}",
+        s.vertices, target_vertices, sloppy.vertices,
+        diff(sloppy.vertices, target_vertices) < diff(s.vertices, target_vertices) ? " and is used"
+                                                                                   : "");
+    if (diff(sloppy.vertices, target_vertices) < diff(s.vertices, target_vertices))
+      s = std::move(sloppy);
   }
   if (static_cast<double>(diff(s.vertices, target_vertices)) > allowed)
-    throw ParameterError(fmt::format("cannot decimate {} vertices to {} within {:.2g}%: the closest "
-                                     "simplification has {}",
-                                     work.vertex_count(), target_vertices, 100.0 * tolerance, s.vertices));
+    throw ParameterError(
+        fmt::format("cannot decimate {} vertices to {} within {:.2g}%: the closest "
+                    "simplification has {}",
+                    work.vertex_count(), target_vertices, 100.0 * tolerance, s.vertices));
 
   std::vector<std::uint16_t> parts;
   if (!work.triangle_part.empty()) {
     parts.reserve(s.indices.size() / 3);
-    for (std::size_t t = 0; t < s.indices.size() / 3; ++t) parts.push_back(part_of[s.indices[3 * t]]);
+    for (std::size_t t = 0; t < s.indices.size() / 3; ++t)
+      parts.push_back(part_of[s.indices[3 * t]]);
   }
   Mesh out = compact_vertices(work, std::move(s.indices), std::move(parts));
   finish_attributes(out);
@@ -346,7 +361,8 @@ Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, dou
 Mesh subdivide(const Mesh& mesh, bool smooth) {
   const std::size_t V = mesh.vertex_count();
   const std::size_t T = mesh.triangle_count();
-  for (std::uint32_t i : mesh.indices) PRT_CHECK(i < V, "subdivide: index {} out of range ({} vertices)", i, V);
+  for (std::uint32_t i : mesh.indices)
+    PRT_CHECK(i < V, "subdivide: index {} out of range ({} vertices)", i, V);
   PRT_CHECK(V + 3 * T <= kNone, "subdivide: the result would exceed 32-bit indices");
 
   Mesh out;
@@ -370,10 +386,12 @@ Mesh subdivide(const Mesh& mesh, bool smooth) {
   out.indices.reserve(12 * T);
   if (!mesh.triangle_part.empty()) out.triangle_part.reserve(4 * T);
   for (std::size_t t = 0; t < T; ++t) {
-    const std::uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
+    const std::uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1],
+                        c = mesh.indices[3 * t + 2];
     const std::uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
     out.indices.insert(out.indices.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
-    if (!mesh.triangle_part.empty()) out.triangle_part.insert(out.triangle_part.end(), 4, mesh.triangle_part[t]);
+    if (!mesh.triangle_part.empty())
+      out.triangle_part.insert(out.triangle_part.end(), 4, mesh.triangle_part[t]);
   }
 
   if (smooth) {
@@ -453,13 +471,15 @@ Mesh subdivide(const Mesh& mesh, bool smooth) {
   return out;
 }
 
-Mesh resample_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, double tolerance, bool smooth) {
+Mesh resample_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, double tolerance,
+                              bool smooth) {
   if (target_vertices == mesh.vertex_count()) {
     Mesh out = mesh;
     finish_attributes(out);
     return out;
   }
-  if (target_vertices < mesh.vertex_count()) return decimate_to_vertex_count(mesh, target_vertices, tolerance);
+  if (target_vertices < mesh.vertex_count())
+    return decimate_to_vertex_count(mesh, target_vertices, tolerance);
   if (mesh.triangle_count() == 0)
     throw ParameterError("cannot resample a mesh without triangles to more vertices");
   Mesh fine = subdivide(mesh, smooth);
@@ -485,8 +505,8 @@ void apply_transform(Mesh& mesh, const Transform& xf) {
   const Mat3d m = xf.linear();
   const double det = glm::determinant(m);
   if (!(std::abs(det) > 0.0) || !std::isfinite(det))
-    throw ParameterError(fmt::format("transform is singular (scale [{}, {}, {}])", xf.scale.x, xf.scale.y,
-                                     xf.scale.z));
+    throw ParameterError(fmt::format("transform is singular (scale [{}, {}, {}])", xf.scale.x,
+                                     xf.scale.y, xf.scale.z));
   const Mat3d normal_matrix = glm::transpose(glm::inverse(m));
   for (Vec3& p : mesh.positions) p = Vec3(m * Vec3d(p) + xf.translate);
   for (Vec3& n : mesh.normals) {
@@ -506,7 +526,8 @@ void apply_transform(Mesh& mesh, const Transform& xf) {
     }
   }
   if (det < 0.0)
-    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+      std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
 }
 
 void normalize_to_unit_box(Mesh& mesh, bool on_ground) {

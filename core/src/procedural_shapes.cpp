@@ -15,12 +15,13 @@ struct GridVertex {
 
 void require_positive(double value, std::string_view what) {
   if (!(value > 0.0) || !std::isfinite(value))
-    throw ParameterError(fmt::format("procedural shape: {} must be positive and finite, not {}", what, value));
+    throw ParameterError(
+        fmt::format("procedural shape: {} must be positive and finite, not {}", what, value));
 }
 void require_count(int value, int minimum, std::string_view what) {
   if (value < minimum || value > 1 << 14)
-    throw ParameterError(fmt::format("procedural shape: {} must be in [{}, {}], not {}", what, minimum,
-                                     1 << 14, value));
+    throw ParameterError(fmt::format("procedural shape: {} must be in [{}, {}], not {}", what,
+                                     minimum, 1 << 14, value));
 }
 
 /// Appends a (cols+1) x (rows+1) vertex grid with uv = (i/cols, j/rows), two triangles per
@@ -39,7 +40,9 @@ void add_grid(Mesh& mesh, int cols, int rows, F&& vertex_at) {
                             static_cast<float>(j) / static_cast<float>(rows));
     }
   }
-  const auto at = [&](int i, int j) { return base + static_cast<std::uint32_t>(j * (cols + 1) + i); };
+  const auto at = [&](int i, int j) {
+    return base + static_cast<std::uint32_t>(j * (cols + 1) + i);
+  };
   const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     const Vec3& pa = mesh.positions[a];
     const Vec3& pb = mesh.positions[b];
@@ -84,7 +87,9 @@ std::pair<double, double> around(int k, int n) {
 
 /// Grid parameter (2k - n) / n in [-1, 1]: exact under negation, so that box faces meeting
 /// at an edge produce identical coordinates whichever way their axes run.
-double signed_param(int k, int n) { return static_cast<double>(2 * k - n) / static_cast<double>(n); }
+double signed_param(int k, int n) {
+  return static_cast<double>(2 * k - n) / static_cast<double>(n);
+}
 
 }  // namespace
 
@@ -115,8 +120,9 @@ Mesh make_plane(double size_x, double size_z, int n) {
   require_count(n, 1, "plane subdivisions");
   Mesh mesh;
   add_grid(mesh, n, n, [&](int i, int j) {
-    return GridVertex{Vec3d(0.5 * size_x * signed_param(i, n), 0.0, -0.5 * size_z * signed_param(j, n)),
-                      Vec3d(0, 1, 0), Vec3d(1, 0, 0)};
+    return GridVertex{
+        Vec3d(0.5 * size_x * signed_param(i, n), 0.0, -0.5 * size_z * signed_param(j, n)),
+        Vec3d(0, 1, 0), Vec3d(1, 0, 0)};
   });
   return mesh;
 }
@@ -149,8 +155,9 @@ Mesh make_box(const Vec3d& half_extent, int n) {
 Mesh make_torus(double major_radius, double minor_radius, int segments, int sides) {
   require_positive(minor_radius, "torus minor radius");
   if (!(major_radius > minor_radius) || !std::isfinite(major_radius))
-    throw ParameterError(fmt::format("procedural shape: torus major radius {} must exceed the minor radius {}",
-                                     major_radius, minor_radius));
+    throw ParameterError(
+        fmt::format("procedural shape: torus major radius {} must exceed the minor radius {}",
+                    major_radius, minor_radius));
   require_count(segments, 3, "torus segments");
   require_count(sides, 3, "torus sides");
   Mesh mesh;
@@ -176,7 +183,8 @@ Mesh make_cylinder(double radius, double height, int segments, int rings) {
   };
   add_grid(mesh, segments, rings, [&](int i, int j) {
     const auto [c, s] = around(i, segments);
-    const double y = j == rings ? height : height * static_cast<double>(j) / static_cast<double>(rings);
+    const double y =
+        j == rings ? height : height * static_cast<double>(j) / static_cast<double>(rings);
     return GridVertex{rim(i, y), Vec3d(c, 0.0, -s), Vec3d(-s, 0.0, -c)};
   });
   // Caps: a centre and a ring, planar UVs with u along +x and v along n x (+x).

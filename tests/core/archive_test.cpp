@@ -211,6 +211,19 @@ std::string open_error(const fs::path& p, std::string_view kind = {},
   return error_of([&] { (void)ArchiveReader::open(p, kind, max_version); });
 }
 
+TEST(Hasher, AddFileHashesLengthThenContent) {
+  TempDir dir;
+  const auto data = pattern(3 << 20);  // spans several read chunks
+  write_raw(dir / "blob", data);
+  Hasher expected;
+  expected.add(static_cast<std::uint64_t>(data.size())).add(data);
+  EXPECT_EQ(Hasher().add_file(dir / "blob").digest(), expected.digest());
+  write_raw(dir / "empty", {});
+  EXPECT_EQ(Hasher().add_file(dir / "empty").digest(), Hasher().add(std::uint64_t{0}).digest());
+  EXPECT_THAT(error_of([&] { Hasher().add_file(dir / "missing"); }),
+              HasSubstr((dir / "missing").string()));
+}
+
 // A sample covering every element type, awkward float values and an empty section.
 struct Sample {
   std::vector<std::uint8_t> u8{0, 1, 255, 128};

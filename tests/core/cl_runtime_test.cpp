@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <vector>
@@ -190,21 +191,45 @@ TEST(DeviceChoice, NoDeviceIsNulloptUnlessStrict) {
   EXPECT_THROW(choose_device({}, {"", true}), ParameterError);
 }
 
+// Sets an environment variable for one scope and restores the previous value (the user's
+// PRTLAB_DEVICE must still apply to the tests that run after this one).
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    if (value) {
+      ::setenv(name, value, 1);
+    } else {
+      ::unsetenv(name);
+    }
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      ::setenv(name_, old_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
 TEST(DeviceRequest, CliOverridesEnvironment) {
-  ::setenv("PRTLAB_DEVICE", "pocl", 1);
-  ::setenv("PRTLAB_DEVICE_STRICT", "1", 1);
-  const DeviceRequest from_env = DeviceRequest::resolve();
-  const DeviceRequest from_cli = DeviceRequest::resolve("gpu");
-  ::unsetenv("PRTLAB_DEVICE_STRICT");
-  const DeviceRequest not_strict = DeviceRequest::resolve();
-  const DeviceRequest strict_flag = DeviceRequest::resolve("", true);
-  ::unsetenv("PRTLAB_DEVICE");
-  EXPECT_EQ(from_env.spec, "pocl");
-  EXPECT_TRUE(from_env.strict);
-  EXPECT_EQ(from_cli.spec, "gpu");
-  EXPECT_FALSE(not_strict.strict);
-  EXPECT_TRUE(strict_flag.strict);
+  {
+    ScopedEnv device("PRTLAB_DEVICE", "pocl");
+    ScopedEnv strict("PRTLAB_DEVICE_STRICT", "1");
+    const DeviceRequest from_env = DeviceRequest::resolve();
+    EXPECT_EQ(from_env.spec, "pocl");
+    EXPECT_TRUE(from_env.strict);
+    EXPECT_EQ(DeviceRequest::resolve("gpu").spec, "gpu");
+  }
+  ScopedEnv device("PRTLAB_DEVICE", nullptr);
+  ScopedEnv strict("PRTLAB_DEVICE_STRICT", "0");
   EXPECT_EQ(DeviceRequest::resolve().spec, "");
+  EXPECT_FALSE(DeviceRequest::resolve().strict);
+  EXPECT_TRUE(DeviceRequest::resolve("", true).strict);
 }
 
 // Without any OpenCL platform, selection warns once per process and returns nullopt. Runs in a
@@ -311,8 +336,13 @@ TEST(SelfTest, Saxpy4MatchesReferenceAtPrimeSizeAndLeavesPaddingAlone) {
 
   for (std::size_t i = 0; i < kPrimeN; ++i)
     for (int c = 0; c < 3; ++c) {
-      const double ref = static_cast<double>(a) * x[i].s[c] + y[i].s[c];
-      ASSERT_TRUE(near_relative(out[i].s[c], ref, 1e-6)) << "element " << i << " channel " << c;
+      // Relative to the size of the terms, not of the result: where a*x and y nearly cancel,
+      // float rounding of a*x (a device without fused multiply-add) is legitimately large
+      // relative to the result.
+      const double ax = static_cast<double>(a) * x[i].s[c];
+      const double ref = ax + y[i].s[c];
+      ASSERT_LE(std::abs(out[i].s[c] - ref), 1e-6 * (std::abs(ax) + std::abs(y[i].s[c])))
+          << "element " << i << " channel " << c << ": got " << out[i].s[c] << ", expected " << ref;
     }
   for (std::size_t i = kPrimeN; i < out.size(); ++i)
     ASSERT_EQ(out[i].s[0], kSentinel) << "padded work-item " << i << " wrote past n";
@@ -498,10 +528,12 @@ TEST(KernelTimer, LaunchesAreCountedAndSummarised) {
   cl::Buffer by = upload(ctx, std::span<const cl_float4>(x), "y", CL_MEM_READ_WRITE);
   set_args(k, 100u, 1.0f, bx, by);
   const std::uint64_t before = ctx.timer().count("timer.saxpy4");
+  const std::uint64_t unnamed_before = ctx.timer().count("saxpy4");
   for (int i = 0; i < 3; ++i) launch(ctx, "timer.saxpy4", k, LaunchRange::linear(100));
   launch(ctx, "", k, LaunchRange::linear(0));  // empty: counted, nothing runs
   EXPECT_EQ(ctx.timer().count("timer.saxpy4"), before + 3);
-  EXPECT_EQ(ctx.timer().count("saxpy4"), 1u) << "unnamed launches use the kernel's name";
+  EXPECT_EQ(ctx.timer().count("saxpy4"), unnamed_before + 1)
+      << "unnamed launches use the kernel's name";
   const auto stats = ctx.timer().stats("timer.saxpy4");
   ASSERT_TRUE(stats.has_value());
   EXPECT_EQ(stats->count, before + 3);

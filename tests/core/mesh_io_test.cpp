@@ -100,7 +100,8 @@ TEST_F(MeshIoTest, LoadsHandWrittenOffExactly) {
   const std::vector<Vec3> expected_positions = {
       {-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}, {0, 2.5f, 0}};
   EXPECT_EQ(m.positions, expected_positions);
-  const std::vector<std::uint32_t> expected_indices = {0, 1, 2, 0, 2, 3, 1, 0, 4, 2, 1, 4, 3, 2, 4, 0, 3, 4};
+  const std::vector<std::uint32_t> expected_indices = {0, 1, 2, 0, 2, 3, 1, 0, 4,
+                                                       2, 1, 4, 3, 2, 4, 0, 3, 4};
   EXPECT_EQ(m.indices, expected_indices);
   EXPECT_FALSE(m.has_uvs());
   EXPECT_EQ(report.degenerate_dropped, 0u);
@@ -145,7 +146,8 @@ TEST_F(MeshIoTest, LoadsHandWrittenObjExactly) {
   EXPECT_EQ(report.unused_vertices_removed, 0u);
 
   Mesh expected;
-  expected.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}};
+  expected.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                        {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}};
   expected.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}, {1, 0}, {1, 1}, {0, 1}};
   // Assimp triangulates the quad 1-2-3-4 as (1,2,3),(1,3,4) or (1,2,4),(2,3,4): accept either.
   expected.indices = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
@@ -156,39 +158,47 @@ TEST_F(MeshIoTest, LoadsHandWrittenObjExactly) {
 }
 
 TEST_F(MeshIoTest, TruncatedOffIsAnInputError) {
-  expect_input_error(write("cut_faces.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"),
-                     {"truncated", "header declares 4 vertices and 2 faces", "after all 4 vertices and 1 face"});
+  expect_input_error(
+      write("cut_faces.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"),
+      {"truncated", "header declares 4 vertices and 2 faces", "after all 4 vertices and 1 face"});
   expect_input_error(write("cut_vertices.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n"),
                      {"truncated", "header declares 4 vertices and 2 faces", "after 3 vertices"});
-  expect_input_error(write("cut_line.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2"),
-                     {"truncated", "inside face 1"});
+  expect_input_error(
+      write("cut_line.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2"),
+      {"truncated", "inside face 1"});
   expect_input_error(write("cut_header.off", "OFF\n"), {"truncated"});
 }
 
 TEST_F(MeshIoTest, NonFiniteVertexIsAnInputError) {
-  expect_input_error(write("nan.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n3 0 1 2\n3 0 2 3\n"),
-                     {"vertex 2", "NaN coordinate"});
-  expect_input_error(write("inf.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 -inf\n3 0 1 2\n3 0 2 3\n"),
-                     {"vertex 3", "infinite coordinate"});
+  expect_input_error(
+      write("nan.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n3 0 1 2\n3 0 2 3\n"),
+      {"vertex 2", "NaN coordinate"});
+  expect_input_error(
+      write("inf.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 -inf\n3 0 1 2\n3 0 2 3\n"),
+      {"vertex 3", "infinite coordinate"});
   // Beyond float range: infinite once stored as float.
   expect_input_error(write("huge.off", "OFF\n3 1 0\n0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n"),
                      {"vertex 1", "infinite coordinate"});
-  expect_input_error(write("nan.obj", "v 0 0 0\nv 1 0 0\nv NaN 1 0\nf 1 2 3\n"), {"vertex 2", "NaN coordinate"});
+  expect_input_error(write("nan.obj", "v 0 0 0\nv 1 0 0\nv NaN 1 0\nf 1 2 3\n"),
+                     {"vertex 2", "NaN coordinate"});
 }
 
 TEST_F(MeshIoTest, OutOfRangeIndexIsAnInputError) {
-  expect_input_error(write("range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 7\n"),
-                     {"face 1", "vertex 7", "4 vertices"});
+  expect_input_error(
+      write("range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 7\n"),
+      {"face 1", "vertex 7", "4 vertices"});
   expect_input_error(write("negative.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n"),
                      {"face 0", "vertex -1"});
   expect_input_error(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 9\n"),
                      {"face 1", "vertex 9", "defines 3"});
-  expect_input_error(write("relative.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\n"), {"face 0", "vertex -3"});
-  expect_input_error(write("range.ply",
-                           "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
-                     {"face 0", "vertex 5"});
+  expect_input_error(write("relative.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\n"),
+                     {"face 0", "vertex -3"});
+  expect_input_error(
+      write("range.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+            "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
+      {"face 0", "vertex 5"});
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.indices = {0, 1, 2, 2, 1, 9};
@@ -220,10 +230,13 @@ TEST_F(MeshIoTest, MissingFileIsAnInputError) {
 TEST_F(MeshIoTest, EmptyMeshIsAnInputError) {
   expect_input_error(write("zero.off", "OFF\n0 0 0\n"), {"empty mesh"});
   expect_input_error(write("blank.off", "# nothing but a comment\n"), {"empty mesh"});
-  expect_input_error(write("points.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), {"empty mesh", "0 faces"});
-  expect_input_error(write("vertices_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"), {"empty mesh", "no triangles"});
+  expect_input_error(write("points.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"),
+                     {"empty mesh", "0 faces"});
+  expect_input_error(write("vertices_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+                     {"empty mesh", "no triangles"});
   // Only degenerate triangles: empty after dropping them.
-  expect_input_error(write("flat.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n"), {"empty mesh", "degenerate"});
+  expect_input_error(write("flat.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n"),
+                     {"empty mesh", "degenerate"});
 }
 
 TEST_F(MeshIoTest, DegenerateTrianglesAreDroppedWithOneWarning) {
@@ -232,13 +245,13 @@ TEST_F(MeshIoTest, DegenerateTrianglesAreDroppedWithOneWarning) {
   const fs::path file = write("degenerate.off",
                               "OFF\n7 7 0\n"
                               "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
-                              "2 0 0\n"     // 4: collinear with 0 and 1
-                              "0.5 0 0\n"   // 5: also on the x axis
-                              "9 9 9\n"     // 6: unused
+                              "2 0 0\n"    // 4: collinear with 0 and 1
+                              "0.5 0 0\n"  // 5: also on the x axis
+                              "9 9 9\n"    // 6: unused
                               "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n"
-                              "3 0 0 3\n"   // repeated index
-                              "3 0 5 4\n"   // zero area
-                              "2 4 5\n");   // a line
+                              "3 0 0 3\n"  // repeated index
+                              "3 0 5 4\n"  // zero area
+                              "2 4 5\n");  // a line
   MeshLoadReport report;
   const int warnings_before = warning_count();
   const Mesh m = load_mesh(file, &report);
@@ -278,7 +291,8 @@ TEST_F(MeshIoTest, SavedObjReadsBack) {
     return true;
   };
   for (const Tri& t : canonical_triangles(back))
-    EXPECT_TRUE(std::any_of(expected.begin(), expected.end(), [&](const Tri& e) { return close(t, e); }));
+    EXPECT_TRUE(
+        std::any_of(expected.begin(), expected.end(), [&](const Tri& e) { return close(t, e); }));
 }
 
 }  // namespace

@@ -59,7 +59,11 @@ std::vector<Shape> shapes() {
   return {
       {"sphere", [] { return make_sphere(1.25, 24, 12); }, true},
       {"plane", [] { return make_plane(2.0, 3.0, 5); }, false},
-      {"box", [] { return make_box({0.5, 1.0, 1.5}, 3); }, true},
+      {"box",
+       [] {
+         return make_box({0.5, 1.0, 1.5}, 3);
+       },
+       true},
       {"torus", [] { return make_torus(1.0, 0.3, 24, 12); }, true},
       {"cylinder", [] { return make_cylinder(0.5, 2.0, 20, 3); }, true},
   };
@@ -71,12 +75,13 @@ TEST(ProceduralShapes, SphereAreaAndVolumeConvergeFromBelow) {
   for (const int segments : {16, 32, 64}) {
     const Measures m = measure(make_sphere(r, segments, segments / 2));
     const double area = 4.0 * kPi * r * r, volume = 4.0 / 3.0 * kPi * r * r * r;
-    // An inscribed polyhedron: both fall short, by O(h^2) (about 5 / segments^2 here).
-    const double bound = 5.0 / (segments * segments);
+    // An inscribed polyhedron falls short by O(h^2), h = 2 pi / segments the angular spacing
+    // (the rings have the same): about 0.21 h^2 in area and 0.41 h^2 in volume.
+    const double h2 = std::pow(kTwoPi / segments, 2);
     EXPECT_LT(m.area, area);
     EXPECT_LT(m.volume, volume);
-    EXPECT_GT(m.area, area * (1.0 - bound)) << segments;
-    EXPECT_GT(m.volume, volume * (1.0 - bound)) << segments;
+    EXPECT_GT(m.area, area * (1.0 - 0.25 * h2)) << segments;
+    EXPECT_GT(m.volume, volume * (1.0 - 0.5 * h2)) << segments;
     const double error = 1.0 - m.volume / volume;
     EXPECT_LT(error, 0.3 * previous_error) << "second-order convergence";
     previous_error = error;
@@ -115,7 +120,8 @@ TEST(ProceduralShapes, NormalsAreUnitAndOutwardTangentsOrthogonalUvsRightHanded)
       const Vec3d e1 = Vec3d(m.positions[i[1]]) - p0, e2 = Vec3d(m.positions[i[2]]) - p0;
       const Vec3d face = glm::normalize(glm::cross(e1, e2));
       // Winding agrees with the normals (counter-clockwise seen from the front).
-      for (int c = 0; c < 3; ++c) EXPECT_GT(glm::dot(face, Vec3d(m.normals[i[c]])), 0.3) << "triangle " << t;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_GT(glm::dot(face, Vec3d(m.normals[i[c]])), 0.3) << "triangle " << t;
       // dp/du and dp/dv of the triangle: the tangent follows +u, and n x t follows +v.
       const Vec2d w0(m.uvs[i[0]]), d1 = Vec2d(m.uvs[i[1]]) - w0, d2 = Vec2d(m.uvs[i[2]]) - w0;
       const double det = d1.x * d2.y - d2.x * d1.y;
@@ -130,11 +136,14 @@ TEST(ProceduralShapes, NormalsAreUnitAndOutwardTangentsOrthogonalUvsRightHanded)
     }
     // Closed shapes enclose positive volume (outward winding); the analytic normals point away
     // from the centre of a sphere.
-    if (shape.closed) EXPECT_GT(measure(m).volume, 0.0);
+    if (shape.closed) {
+      EXPECT_GT(measure(m).volume, 0.0);
+    }
   }
   const Mesh sphere = make_sphere(2.0, 16, 8);
   for (std::size_t v = 0; v < sphere.vertex_count(); ++v)
-    EXPECT_NEAR(glm::dot(Vec3d(sphere.normals[v]), glm::normalize(Vec3d(sphere.positions[v]))), 1.0, 1e-6);
+    EXPECT_NEAR(glm::dot(Vec3d(sphere.normals[v]), glm::normalize(Vec3d(sphere.positions[v]))), 1.0,
+                1e-6);
 }
 
 TEST(ProceduralShapes, ClosedShapesCloseWhenWelded) {
@@ -156,9 +165,11 @@ TEST(ProceduralShapes, ClosedShapesCloseWhenWelded) {
   // Exact counts after welding: a box of n x n quads per face has 6 n^2 + 2 vertices; a
   // UV sphere segments x (rings - 1) + 2.
   EXPECT_EQ(weld_vertices(make_box({1, 2, 3}, 3), WeldKey::kPosition).vertex_count(), 6u * 9u + 2u);
-  EXPECT_EQ(weld_vertices(make_sphere(1, 24, 12), WeldKey::kPosition).vertex_count(), 24u * 11u + 2u);
+  EXPECT_EQ(weld_vertices(make_sphere(1, 24, 12), WeldKey::kPosition).vertex_count(),
+            24u * 11u + 2u);
   EXPECT_EQ(make_sphere(1, 24, 12).vertex_count(), 25u * 11u + 2u * 24u);
-  EXPECT_EQ(weld_vertices(make_torus(1, 0.3, 24, 12), WeldKey::kPosition).vertex_count(), 24u * 12u);
+  EXPECT_EQ(weld_vertices(make_torus(1, 0.3, 24, 12), WeldKey::kPosition).vertex_count(),
+            24u * 12u);
 }
 
 TEST(ProceduralShapes, InvalidParametersAreParameterErrors) {

@@ -200,6 +200,29 @@ TEST(TransferMatrix, BlocksHaveOneNonZeroPerColumnAndExactValues) {
   }
 }
 
+// Every entry sits in the row of the local cell containing its pixel's centre direction
+// (centres on or below the tangent plane lifted to the rim at their azimuth).
+TEST(TransferMatrix, EntriesSitInTheCellContainingThePixelCentre) {
+  const Mesh mesh = plane_and_sphere();
+  const auto t = compute_transfer(mesh, quiet_params(16, 6, 2)).transfer;
+  const CubemapLayout layout(16);
+  const HemisphereGrid grid(6);
+  std::size_t lifted = 0;
+  for (std::size_t row = 0; row < t.rows(); ++row) {
+    const std::size_t v = row / 36;
+    const LocalFrame frame = mesh.frame(v);
+    for (std::uint32_t i = t.row_offsets()[row]; i < t.row_offsets()[row + 1]; ++i) {
+      Vec3d l = frame.to_local(layout.direction(static_cast<int>(t.column(i))));
+      if (l.z <= 0.0) {
+        ++lifted;
+        l = Vec3d(glm::normalize(Vec2d(l.x, l.y)), 1e-9);
+      }
+      ASSERT_EQ(static_cast<int>(row % 36), grid.cell_of(l)) << "vertex " << v << ", pixel " << t.column(i);
+    }
+  }
+  EXPECT_GT(lifted, 0u);  // the sphere's vertices have tilted normals: some centres are lifted
+}
+
 TEST(TransferMatrix, DeterministicAcrossThreadCounts) {
   const Mesh mesh = plane_and_sphere();
   TransferParams params = quiet_params(8, 4, 2);
@@ -266,11 +289,11 @@ TEST(TransferMatrix, FromCsrRoundTripsAndRejectsBrokenArrays) {
 // cell must not change beyond the discretisation error. Both configurations approximate the
 // same integral I_j of V L over cell j; each differs from it by at most
 //   sum over pixels k "uncertain" for cell j of |L_k|  (+ the smoothness term below)
-// where k is uncertain when its footprint is not wholly inside one cell (sampled on a 7 x 7
+// where k is uncertain when its footprint is not wholly inside one cell (sampled on a 5 x 5
 // grid of the pixel, the horizon counting as a cell of its own) or when it comes within its
 // angular radius of the sphere's shadow cone (whose rim the polygonal sphere may move by the
 // tessellation's sagitta). The smoothness term covers the point-sampled light: over the pixel,
-// |L(d) - L(d_k)| <= (largest deviation at the 7 x 7 samples) + G radius_k / 6, with G a bound
+// |L(d) - L(d_k)| <= (largest deviation at the 5 x 5 samples) + G radius_k / 4, with G a bound
 // of |grad L| on the sphere.
 struct Config {
   Mat3d q;
@@ -307,14 +330,14 @@ Uncertainty uncertainty(const Config& c, const CubemapLayout& layout, const Hemi
   for (int k = 0; k < layout.pixel_count(); ++k) {
     const int face = k / (r * r), x = (k % (r * r)) % r, y = (k % (r * r)) / r;
     auto sample = [&](int i, int j) {
-      return CubemapLayout::face_direction(face, 2.0 * (x + i / 6.0) / r - 1.0, 2.0 * (y + j / 6.0) / r - 1.0);
+      return CubemapLayout::face_direction(face, 2.0 * (x + i / 4.0) / r - 1.0, 2.0 * (y + j / 4.0) / r - 1.0);
     };
     // The pixel is the convex hull of its corners: its angular radius is the largest corner
     // angle, and it is wholly below the horizon when all corners are.
     double radius = 0.0;
     bool below = true;
-    for (int i : {0, 6})
-      for (int j : {0, 6}) {
+    for (int i : {0, 4})
+      for (int j : {0, 4}) {
         radius = std::max(radius, angle_between(sample(i, j), layout.direction(k)));
         below = below && glm::dot(sample(i, j), c.point.frame.n) <= 0.0;
       }
@@ -322,15 +345,16 @@ Uncertainty uncertainty(const Config& c, const CubemapLayout& layout, const Hemi
     std::set<int> cells;
     const Vec3d centre_light = light_fn(glm::transpose(c.q) * layout.direction(k));
     double deviation = 0.0;
-    for (int i = 0; i <= 6; ++i)
-      for (int j = 0; j <= 6; ++j) {
+    for (int i = 0; i <= 4; ++i)
+      for (int j = 0; j <= 4; ++j) {
         cells.insert(grid.cell_of(c.point.frame.to_local(sample(i, j))));
         deviation = std::max(deviation, glm::length(light_fn(glm::transpose(c.q) * sample(i, j)) - centre_light));
       }
     const double mag = glm::length(Vec3d(light[k]));
-    // Every point of the pixel is within radius / 6 (a grid cell's half diagonal, with
-    // margin) of a sample, so the light deviates from its centre value by at most this.
-    const double smooth = (deviation + kLightGradient * radius / 6.0) * layout.solid_angle(k);
+    // Every point of the pixel is within radius / 4 (half the diagonal of a sample spacing,
+    // with margin for the gnomonic skew) of a sample, so the light deviates from its centre
+    // value by at most this.
+    const double smooth = (deviation + kLightGradient * radius / 4.0) * layout.solid_angle(k);
     const double a = angle_between(layout.direction(k), axis);
     const bool near_cone = a > alpha_in - radius - 1e-3 && a < alpha_out + radius + 1e-3;
     const bool uncertain = cells.size() > 1 || near_cone;

@@ -22,17 +22,19 @@ struct Aabb {
 
 struct Mesh {
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;              ///< unit, per vertex (empty until computed)
-  std::vector<Vec2> uvs;                  ///< per vertex, empty when the mesh has none
-  std::vector<Vec3> tangents;             ///< unit, orthogonal to the normal (empty until computed)
-  std::vector<std::uint32_t> indices;     ///< 3 per triangle, counter-clockwise = front
+  std::vector<Vec3> normals;           ///< unit, per vertex (empty until computed)
+  std::vector<Vec2> uvs;               ///< per vertex, empty when the mesh has none
+  std::vector<Vec3> tangents;          ///< unit, orthogonal to the normal (empty until computed)
+  std::vector<std::uint32_t> indices;  ///< 3 per triangle, counter-clockwise = front
   std::vector<std::uint16_t> triangle_part;  ///< part id per triangle (empty: all part 0)
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t triangle_count() const { return indices.size() / 3; }
   bool has_uvs() const { return !uvs.empty(); }
   /// Part of triangle t (0 when triangle_part is empty).
-  std::uint16_t part_of(std::size_t t) const { return triangle_part.empty() ? 0 : triangle_part[t]; }
+  std::uint16_t part_of(std::size_t t) const {
+    return triangle_part.empty() ? 0 : triangle_part[t];
+  }
   /// Axis-aligned bounds of the positions ({0,0} for an empty mesh).
   Aabb bounds() const;
   /// Local frame of vertex v (requires normals; tangents where present).

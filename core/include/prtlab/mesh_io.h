@@ -27,7 +27,8 @@ Mesh load_mesh(const std::filesystem::path& file, MeshLoadReport* report = nullp
 
 /// Validate an in-memory mesh with the same rules (drops degenerate triangles with one
 /// warning, removes unused vertices); `source` names it in messages.
-void validate_mesh(Mesh& mesh, const std::filesystem::path& source, MeshLoadReport* report = nullptr);
+void validate_mesh(Mesh& mesh, const std::filesystem::path& source,
+                   MeshLoadReport* report = nullptr);
 
 /// Write a mesh as OBJ (for inspection and tests): positions, UVs and normals where present, as
 /// the shortest decimals that a correctly rounded reader turns back into the same floats.

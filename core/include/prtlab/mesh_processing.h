@@ -16,7 +16,8 @@ namespace prt {
 /// that every triangle keeps its part. Unused vertices are removed.
 /// Throws ParameterError when the target is above the current count, below 4, or cannot be
 /// reached within the tolerance.
-Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, double tolerance = 0.002);
+Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices,
+                              double tolerance = 0.002);
 
 /// One level of subdivision (each triangle into 4; new vertices at edge midpoints, shared
 /// between neighbours; UVs interpolated linearly). With `smooth`, positions follow Loop's

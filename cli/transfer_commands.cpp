@@ -1,0 +1,228 @@
+// prtlab precompute / prtlab relight: the exact transfer stage and the exact relight.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <vector>
+
+#include "commands.h"
+#include "prtlab/archive.h"
+#include "prtlab/data_paths.h"
+#include "prtlab/environment_map.h"
+#include "prtlab/exact_relight.h"
+#include "prtlab/scene_transfer.h"
+
+namespace prt::cli {
+namespace {
+
+// The paper's Table I numbers for the scenes it shares with us (DESIGN.md).
+struct PaperRow {
+  const char* scene;
+  double nnz_millions;
+  double mflops;
+  double data_mb;
+};
+constexpr PaperRow kPaper[] = {{"bunny", 10.6, 21.2, 1400},
+                               {"armor", 21.9, 43.9, 9500},
+                               {"chair", 40.5, 81.0, 6300},
+                               {"temple", 62.8, 125.6, 12600},
+                               {"bunny-12k", 39.2, 78.4, 0},
+                               {"bunny-48k", 151.3, 302.6, 0}};
+const PaperRow* paper_row(const std::string& scene) {
+  for (const auto& r : kPaper)
+    if (scene == r.scene) return &r;
+  return nullptr;
+}
+
+struct PrecomputeCli {
+  std::string scene;
+  bool json = false;
+  bool force = false;
+  int sh_order = 0;
+};
+
+struct RelightCli {
+  std::string scene;
+  std::string env;
+  std::string out;
+  bool json = false;
+  int repeat = 20;
+  bool eigen = true;
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+SceneTransfer precompute(const SceneDesc& desc, bool force, int sh_order) {
+  StageCache cache;
+  PrecomputeOptions opt;
+  opt.sh_order = sh_order;
+  opt.cache = force ? CacheMode::kRefresh : CacheMode::kUse;
+  opt.show_progress = !global_options().quiet;
+  return precompute_scene_transfer(desc, opt, cache);
+}
+
+void run_precompute(const PrecomputeCli& o) {
+  const SceneDesc desc = parse_scene(resolve_scene(o.scene));
+  const SceneTransfer st = precompute(desc, o.force, o.sh_order);
+  const TransferMatrix& t = st.result.transfer;
+  const TransferStats& s = st.result.stats;
+  const double nnz_m = static_cast<double>(t.nnz()) / 1e6;
+  const double mflops = 2.0 * static_cast<double>(t.nnz()) / 1e6;
+  const double dense_mb = static_cast<double>(t.dense_bytes()) / 1e6;
+  const double stored_mb = static_cast<double>(t.memory_bytes()) / 1e6;
+  const PaperRow* paper = paper_row(desc.name);
+  if (o.json) {
+    nlohmann::json j;
+    j["scene"] = desc.name;
+    j["vertices"] = t.vertex_count();
+    j["local_directions"] = t.local_count();
+    j["rows"] = t.rows();
+    j["columns"] = t.cols();
+    j["supersampling"] = t.supersampling();
+    j["nnz"] = t.nnz();
+    j["nnz_millions"] = nnz_m;
+    j["mflops_per_relight"] = mflops;
+    j["dense_mb"] = dense_mb;
+    j["stored_bytes"] = t.memory_bytes();
+    j["sh_order"] = st.result.sh ? st.result.sh->order() : 0;
+    j["cache_hit"] = st.cache_hit;
+    j["cache_file"] = st.cache_file.string();
+    j["seconds_this_run"] = st.seconds;
+    j["precompute_seconds"] = s.seconds_total;
+    j["mesh_seconds"] = st.mesh_seconds;
+    j["rays_traced"] = s.rays_traced;
+    j["rays_per_second"] = s.rays_per_second();
+    j["threads"] = s.threads;
+    j["time_breakdown"] = {{"setup", s.seconds_setup},
+                           {"points", s.seconds_points},
+                           {"assemble", s.seconds_assemble},
+                           {"thread_seconds_trace", s.thread_seconds_trace},
+                           {"thread_seconds_bin", s.thread_seconds_bin},
+                           {"thread_seconds_sh", s.thread_seconds_sh}};
+    if (paper)
+      j["paper"] = {{"nnz_millions", paper->nnz_millions}, {"mflops", paper->mflops}, {"dense_mb", paper->data_mb}};
+    j["parameters"] = {{"local_grid", desc.local_grid},
+                       {"cubemap_resolution", desc.cubemap_resolution},
+                       {"supersampling", desc.supersampling}};
+    print_json(std::move(j));
+    return;
+  }
+  std::printf("scene            %s%s\n", desc.name.c_str(), st.cache_hit ? "  (cache hit)" : "");
+  std::printf("vertices         %zu\n", t.vertex_count());
+  std::printf("T                %zu x %zu (M = %d)\n", t.rows(), t.cols(), t.local_count());
+  std::printf("nnz(T)           %.2f M%s\n", nnz_m,
+              paper ? fmt::format("   (paper: {:.1f} M)", paper->nnz_millions).c_str() : "");
+  std::printf("MFLOPs/relight   %.1f\n", mflops);
+  std::printf("dense data       %.0f MB%s\n", dense_mb,
+              paper && paper->data_mb > 0 ? fmt::format("   (paper: {:.0f} MB)", paper->data_mb).c_str() : "");
+  std::printf("stored           %.1f MB (CSR: u32 offsets, u16 columns, u8 counts)\n", stored_mb);
+  std::printf("precompute       %.2f s (%s: %.2f s setup, %.2f s rays+binning, %.2f s assemble)\n", s.seconds_total,
+              st.cache_hit ? "cached result" : "this run", s.seconds_setup, s.seconds_points, s.seconds_assemble);
+  std::printf("rays             %.1f M traced, %.1f M rays/s on %d threads\n", s.rays_traced / 1e6,
+              s.rays_per_second() / 1e6, s.threads);
+  std::printf("this run         %.2f s%s\n", st.seconds, st.cache_hit ? " (loaded from cache)" : "");
+}
+
+void run_relight(const RelightCli& o) {
+  const SceneDesc desc = parse_scene(resolve_scene(o.scene));
+  const SceneTransfer st = precompute(desc, false, 0);
+  const TransferMatrix& t = st.result.transfer;
+  const auto env_file = resolve_envmap(o.env);
+  const Cubemap cube = resample_to_cubemap(load_latlong_exr(env_file), desc.cubemap_resolution);
+  const std::vector<Rgb> light = cube.light_vector();
+
+  LocalRadiance out(RadianceBasis::kPixel, t.local_count(), t.vertex_count());
+  auto time_ms = [&](auto&& fn) {
+    std::vector<double> ms;
+    for (int i = 0; i < std::max(1, o.repeat); ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      fn();
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return median(ms);
+  };
+  const double ms_all = time_ms([&] { relight_exact(t, light, out.values); });
+  const double ms_one = time_ms([&] { relight_exact(t, light, out.values, RelightThreads::kOne); });
+  double ms_eigen = 0;
+  if (o.eigen) {
+    const EigenSparseTransfer eig(t);
+    const auto dense = EigenSparseTransfer::to_dense(light);
+    EigenSparseTransfer::Dense res;
+    ms_eigen = time_ms([&] { eig.multiply(dense, res); });
+  }
+  relight_exact(t, light, out.values);
+  // Float vs double accumulation: the runtime precision error DESIGN.md asks to report.
+  const auto ref = relight_exact_double(t, light);
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double d = out.values[i][c] - ref[i][c];
+      num += d * d;
+      den += ref[i][c] * ref[i][c];
+    }
+  const double float_error = den > 0 ? std::sqrt(num / den) : 0.0;
+
+  if (!o.out.empty()) {
+    ArchiveWriter w("local-radiance", 1);
+    w.add_meta("scene", desc.name);
+    w.add_meta("env", env_file.string());
+    w.add_meta("basis", "pixel");
+    w.add_meta("dim", out.dim);
+    w.add_meta("vertices", out.vertices);
+    w.add_meta("prtlab", provenance());
+    std::vector<float> flat(out.values.size() * 3);
+    for (std::size_t i = 0; i < out.values.size(); ++i)
+      for (int c = 0; c < 3; ++c) flat[3 * i + c] = out.values[i][c];
+    w.add_section("rgb", std::move(flat));
+    w.write(o.out);
+  }
+  if (o.json) {
+    nlohmann::json j;
+    j["scene"] = desc.name;
+    j["env"] = env_file.string();
+    j["rows"] = t.rows();
+    j["nnz"] = t.nnz();
+    j["repeat"] = o.repeat;
+    j["ms_per_relight"] = ms_all;
+    j["ms_per_relight_one_thread"] = ms_one;
+    if (o.eigen) j["ms_per_relight_eigen"] = ms_eigen;
+    j["gnnz_per_second"] = static_cast<double>(t.nnz()) / (ms_all * 1e6);
+    j["float_vs_double_rel_l2"] = float_error;
+    j["output"] = o.out;
+    print_json(std::move(j));
+    return;
+  }
+  std::printf("scene          %s, env %s\n", desc.name.c_str(), env_file.filename().string().c_str());
+  std::printf("T              %zu x %zu, nnz %.2f M\n", t.rows(), t.cols(), t.nnz() / 1e6);
+  std::printf("relight        %.3f ms (all threads), %.3f ms (one thread), median of %d\n", ms_all, ms_one, o.repeat);
+  if (o.eigen) std::printf("eigen sparse   %.3f ms  (ratio %.2fx)\n", ms_eigen, ms_eigen / ms_all);
+  std::printf("float error    %.2e relative L2 vs double accumulation\n", float_error);
+  if (!o.out.empty()) std::printf("wrote          %s\n", o.out.c_str());
+}
+
+}  // namespace
+
+void add_transfer_commands(CLI::App& app) {
+  auto pre = std::make_shared<PrecomputeCli>();
+  auto* p = app.add_subcommand("precompute", "Compute (or load from the stage cache) the exact transfer matrix T");
+  p->add_option("scene", pre->scene, "Scene name or .toml path")->required();
+  p->add_flag("--json", pre->json, "Machine-readable output (docs/cli.md)");
+  p->add_flag("--force", pre->force, "Recompute even when the stage cache has T");
+  p->add_option("--sh-order", pre->sh_order, "Also compute the SH transfer of this order (n = order^2; 0: none)")
+      ->check(CLI::Range(0, 10));
+  p->callback([pre] { run_precompute(*pre); });
+
+  auto rel = std::make_shared<RelightCli>();
+  auto* r = app.add_subcommand("relight", "Exact relight L* = T L under an environment map, timed");
+  r->add_option("scene", rel->scene, "Scene name or .toml path")->required();
+  r->add_option("--env", rel->env, "Environment map: a lat-long EXR path or a name (courtyard, ...)")->required();
+  r->add_option("--out", rel->out, "Write L* as a prtlab archive (kind local-radiance)");
+  r->add_option("--repeat", rel->repeat, "Timed repetitions (median reported)")->check(CLI::Range(1, 100000));
+  r->add_flag("--json", rel->json, "Machine-readable output (docs/cli.md)");
+  r->add_flag("!--no-eigen", rel->eigen, "Skip the Eigen sparse baseline");
+  r->callback([rel] { run_relight(*rel); });
+}
+
+}  // namespace prt::cli
