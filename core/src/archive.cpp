@@ -39,7 +39,9 @@ constexpr std::size_t kMaxNameBytes = 255;
 // Smallest possible archive: fixed header + 1-byte kind + "{}" padded, and the trailer.
 constexpr std::uint64_t kMinArchiveBytes = 48 + kTrailerBytes;
 
-constexpr std::uint64_t align_up(std::uint64_t x) { return (x + kAlign - 1) & ~(kAlign - 1); }
+constexpr std::uint64_t align_up(std::uint64_t x) {
+  return (x + kAlign - 1) & ~(kAlign - 1);
+}
 
 template <typename T>
 T load_le(const std::byte* p) {
@@ -98,16 +100,26 @@ class Emitter {
 
 std::string element_type_name(ElementType type) {
   switch (type) {
-    case ElementType::kUInt8: return "uint8";
-    case ElementType::kInt8: return "int8";
-    case ElementType::kUInt16: return "uint16";
-    case ElementType::kInt16: return "int16";
-    case ElementType::kUInt32: return "uint32";
-    case ElementType::kInt32: return "int32";
-    case ElementType::kUInt64: return "uint64";
-    case ElementType::kInt64: return "int64";
-    case ElementType::kFloat32: return "float32";
-    case ElementType::kFloat64: return "float64";
+    case ElementType::kUInt8:
+      return "uint8";
+    case ElementType::kInt8:
+      return "int8";
+    case ElementType::kUInt16:
+      return "uint16";
+    case ElementType::kInt16:
+      return "int16";
+    case ElementType::kUInt32:
+      return "uint32";
+    case ElementType::kInt32:
+      return "int32";
+    case ElementType::kUInt64:
+      return "uint64";
+    case ElementType::kInt64:
+      return "int64";
+    case ElementType::kFloat32:
+      return "float32";
+    case ElementType::kFloat64:
+      return "float64";
   }
   return fmt::format("unknown({})", static_cast<int>(type));
 }
@@ -115,15 +127,19 @@ std::string element_type_name(ElementType type) {
 std::size_t element_size(ElementType type) {
   switch (type) {
     case ElementType::kUInt8:
-    case ElementType::kInt8: return 1;
+    case ElementType::kInt8:
+      return 1;
     case ElementType::kUInt16:
-    case ElementType::kInt16: return 2;
+    case ElementType::kInt16:
+      return 2;
     case ElementType::kUInt32:
     case ElementType::kInt32:
-    case ElementType::kFloat32: return 4;
+    case ElementType::kFloat32:
+      return 4;
     case ElementType::kUInt64:
     case ElementType::kInt64:
-    case ElementType::kFloat64: return 8;
+    case ElementType::kFloat64:
+      return 8;
   }
   return 0;
 }
@@ -133,7 +149,8 @@ std::size_t element_size(ElementType type) {
 ArchiveWriter::ArchiveWriter(std::string kind, std::uint32_t kind_version)
     : kind_(std::move(kind)), kind_version_(kind_version), meta_(nlohmann::json::object()) {
   if (kind_.empty() || kind_.size() > kMaxNameBytes)
-    throw ParameterError(fmt::format("archive kind '{}' must be 1 to {} bytes long", kind_, kMaxNameBytes));
+    throw ParameterError(
+        fmt::format("archive kind '{}' must be 1 to {} bytes long", kind_, kMaxNameBytes));
   const BuildInfo& b = build_info();
   meta_["written_by"] = {{"prtlab", b.version}, {"git", b.git_hash}};
 }
@@ -153,8 +170,8 @@ ArchiveWriter& ArchiveWriter::add_owned(std::string name, ElementType type, std:
                                         std::span<const std::byte> bytes,
                                         std::shared_ptr<const void> owner) {
   if (name.empty() || name.size() > kMaxNameBytes)
-    throw ParameterError(fmt::format("archive section name '{}' must be 1 to {} bytes long", name,
-                                     kMaxNameBytes));
+    throw ParameterError(
+        fmt::format("archive section name '{}' must be 1 to {} bytes long", name, kMaxNameBytes));
   if (has_section(name))
     throw ParameterError(fmt::format("archive section '{}' added twice (kind '{}')", name, kind_));
   PRT_CHECK(bytes.size() == count * element_size(type), "section '{}' byte size mismatch", name);
@@ -180,7 +197,8 @@ std::uint64_t ArchiveWriter::size_bytes() const {
 
 void ArchiveWriter::write_to(std::ostream& out, const std::filesystem::path& name) const {
   emit([&](std::span<const std::byte> bytes) {
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
     if (!out) throw InputError(name, "write failed (disk full?)");
   });
 }
@@ -296,8 +314,8 @@ std::shared_ptr<const std::byte> load_file(const std::filesystem::path& file, st
     got += static_cast<std::uint64_t>(n);
   }
   if (got != size)
-    throw InputError(file, fmt::format("read {} of {} bytes (the file changed while being read)",
-                                       got, size));
+    throw InputError(
+        file, fmt::format("read {} of {} bytes (the file changed while being read)", got, size));
   return std::shared_ptr<const std::byte>(buffer, buffer.get());
 }
 
@@ -341,8 +359,7 @@ void ArchiveReader::parse(std::string_view expected_kind, std::uint32_t max_kind
                                         m, kMinArchiveBytes));
   const std::uint64_t length = load_le<std::uint64_t>(d + kFileLengthOffset);
   const auto trailer_fits = [&](std::uint64_t end) {
-    return end >= kMinArchiveBytes && end <= m &&
-           matches(d + end - kTrailerBytes, kEndMagic) &&
+    return end >= kMinArchiveBytes && end <= m && matches(d + end - kTrailerBytes, kEndMagic) &&
            load_le<std::uint64_t>(d + end - kTrailerBytes + 8) == end;
   };
   if (length != m) {
@@ -351,9 +368,10 @@ void ArchiveReader::parse(std::string_view expected_kind, std::uint32_t max_kind
     if (length > m)
       throw InputError(path_, fmt::format("truncated: expected {} bytes, file has {}", length, m));
     if (trailer_fits(length))
-      throw InputError(path_, fmt::format("{} bytes of unexpected data after the end of the archive "
-                                          "(expected {} bytes, file has {})",
-                                          m - length, length, m));
+      throw InputError(path_,
+                       fmt::format("{} bytes of unexpected data after the end of the archive "
+                                   "(expected {} bytes, file has {})",
+                                   m - length, length, m));
     throw InputError(path_, "checksum mismatch (file corrupt)");
   }
   if (m < kMinArchiveBytes)
@@ -400,29 +418,33 @@ void ArchiveReader::parse(std::string_view expected_kind, std::uint32_t max_kind
     throw malformed(fmt::format("{} sections cannot fit in the file", section_count));
   sections_.reserve(section_count);
   for (std::uint32_t i = 0; i < section_count; ++i) {
-    if (end - off < kSectionRecordBytes) throw malformed(fmt::format("section {} runs past the end", i));
+    if (end - off < kSectionRecordBytes)
+      throw malformed(fmt::format("section {} runs past the end", i));
     const std::uint64_t name_bytes = load_le<std::uint32_t>(d + off);
     const auto type = static_cast<ElementType>(load_le<std::uint8_t>(d + off + 4));
     const std::uint64_t count = load_le<std::uint64_t>(d + off + 8);
     const std::uint64_t bytes = load_le<std::uint64_t>(d + off + 16);
-    if (name_bytes == 0 || name_bytes > kMaxNameBytes || end - off - kSectionRecordBytes < name_bytes)
+    if (name_bytes == 0 || name_bytes > kMaxNameBytes ||
+        end - off - kSectionRecordBytes < name_bytes)
       throw malformed(fmt::format("section {} has a bad name length {}", i, name_bytes));
     std::string name(reinterpret_cast<const char*>(d + off + kSectionRecordBytes), name_bytes);
     const std::size_t esize = element_size(type);
     if (esize == 0)
-      throw malformed(fmt::format("section '{}' has unknown element type {}", name,
-                                  static_cast<int>(type)));
+      throw malformed(
+          fmt::format("section '{}' has unknown element type {}", name, static_cast<int>(type)));
     if (bytes % esize != 0 || bytes / esize != count)
       throw malformed(fmt::format("section '{}' holds {} bytes, not {} {} elements", name, bytes,
                                   count, element_type_name(type)));
     const std::uint64_t payload = align_up(off + kSectionRecordBytes + name_bytes);
     if (payload > end || end - payload < bytes)
       throw malformed(fmt::format("section '{}' runs past the end", name));
-    if (!names.insert(name).second) throw malformed(fmt::format("section '{}' appears twice", name));
+    if (!names.insert(name).second)
+      throw malformed(fmt::format("section '{}' appears twice", name));
     sections_.push_back({std::move(name), type, count, payload, bytes});
     off = align_up(payload + bytes);
   }
-  if (off != end) throw malformed(fmt::format("{} unexpected bytes after the last section", end - off));
+  if (off != end)
+    throw malformed(fmt::format("{} unexpected bytes after the last section", end - off));
 
   expect_kind(expected_kind, max_kind_version);
 }

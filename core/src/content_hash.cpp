@@ -32,7 +32,9 @@ int hex_value(char c) {
 
 }  // namespace
 
-std::string Hash128::hex() const { return fmt::format("{:016x}{:016x}", high, low); }
+std::string Hash128::hex() const {
+  return fmt::format("{:016x}{:016x}", high, low);
+}
 
 Hash128 Hash128::from_hex(std::string_view hex) {
   if (hex.size() != 32)
@@ -41,7 +43,8 @@ Hash128 Hash128::from_hex(std::string_view hex) {
   Hash128 h;
   for (std::size_t i = 0; i < 32; ++i) {
     const int v = hex_value(hex[i]);
-    if (v < 0) throw ParameterError(fmt::format("'{}' is not a 128-bit hash (bad digit '{}')", hex, hex[i]));
+    if (v < 0)
+      throw ParameterError(fmt::format("'{}' is not a 128-bit hash (bad digit '{}')", hex, hex[i]));
     std::uint64_t& word = i < 16 ? h.high : h.low;
     word = (word << 4) | static_cast<std::uint64_t>(v);
   }
@@ -66,7 +69,9 @@ Hash128 Hash128::from_canonical_bytes(std::span<const std::byte, 16> bytes) {
   return h;
 }
 
-Hasher::Hasher() : state_(std::make_unique<State>()) { XXH3_128bits_reset(state_->xxh); }
+Hasher::Hasher() : state_(std::make_unique<State>()) {
+  XXH3_128bits_reset(state_->xxh);
+}
 Hasher::~Hasher() = default;
 Hasher::Hasher(const Hasher& other) : state_(std::make_unique<State>()) {
   PRT_CHECK(other.state_, "copy of a moved-from Hasher");
@@ -115,7 +120,8 @@ Hasher& Hasher::add_file(const std::filesystem::path& file) {
   }
   if (std::ferror(f.get())) throw InputError(file, "read error while hashing");
   if (total != size)
-    throw InputError(file, fmt::format("changed while being hashed ({} bytes, then {})", size, total));
+    throw InputError(file,
+                     fmt::format("changed while being hashed ({} bytes, then {})", size, total));
   return *this;
 }
 

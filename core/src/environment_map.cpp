@@ -100,8 +100,9 @@ class PixelOverlap {
  public:
   PixelOverlap(const FaceBasis& fb, double s0, double s1, double t0, double t1) {
     const double sigma = glm::dot(glm::cross(fb.e, fb.b), fb.a) > 0 ? 1.0 : -1.0;
-    // Inward normals of the edges s = s0, s = s1, t = t0, t = t1 (see the derivation in the
-    // comment above: n . (e + s a + t b) is proportional to s - s0, etc.).
+    // Inward normals of the edges s = s0, s = s1, t = t0, t = t1: the plane of the edge s = s0
+    // holds e + s0 a and b, and ((e + s0 a) x b) . (e + s a + t b) = (s - s0) ((e x b) . a),
+    // so sigma = sgn((e x b) . a) makes it positive inside (likewise for t, with -sigma).
     const Vec3d n[4] = {
         sigma * glm::cross(fb.e + s0 * fb.a, fb.b), -sigma * glm::cross(fb.e + s1 * fb.a, fb.b),
         -sigma * glm::cross(fb.e + t0 * fb.b, fb.a), sigma * glm::cross(fb.e + t1 * fb.b, fb.a)};

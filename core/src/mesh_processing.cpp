@@ -358,7 +358,10 @@ Mesh decimate_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, dou
   return out;
 }
 
-Mesh subdivide(const Mesh& mesh, bool smooth) {
+namespace {
+
+/// subdivide() without the normals and tangents (resampling computes them once at the end).
+Mesh subdivide_core(const Mesh& mesh, bool smooth) {
   const std::size_t V = mesh.vertex_count();
   const std::size_t T = mesh.triangle_count();
   for (std::uint32_t i : mesh.indices)
@@ -467,6 +470,13 @@ Mesh subdivide(const Mesh& mesh, bool smooth) {
     }
     for (std::size_t v = 0; v < V; ++v) out.positions[v] = moved[rep[v]];
   }
+  return out;
+}
+
+}  // namespace
+
+Mesh subdivide(const Mesh& mesh, bool smooth) {
+  Mesh out = subdivide_core(mesh, smooth);
   finish_attributes(out);
   return out;
 }
@@ -482,9 +492,12 @@ Mesh resample_to_vertex_count(const Mesh& mesh, std::size_t target_vertices, dou
     return decimate_to_vertex_count(mesh, target_vertices, tolerance);
   if (mesh.triangle_count() == 0)
     throw ParameterError("cannot resample a mesh without triangles to more vertices");
-  Mesh fine = subdivide(mesh, smooth);
-  while (fine.vertex_count() < target_vertices) fine = subdivide(fine, smooth);
-  if (fine.vertex_count() == target_vertices) return fine;
+  Mesh fine = subdivide_core(mesh, smooth);
+  while (fine.vertex_count() < target_vertices) fine = subdivide_core(fine, smooth);
+  if (fine.vertex_count() == target_vertices) {
+    finish_attributes(fine);
+    return fine;
+  }
   return decimate_to_vertex_count(fine, target_vertices, tolerance);
 }
 

@@ -15,9 +15,10 @@ void validate_stage(std::string_view stage) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
   });
   if (stage.empty() || stage.size() > kMaxStageChars || stage.front() == '.' || !ok_chars)
-    throw ParameterError(fmt::format("stage name '{}' is not valid for the cache (1 to {} "
-                                     "characters of a-z 0-9 . _ -, not starting with '.')",
-                                     stage, kMaxStageChars));
+    throw ParameterError(
+        fmt::format("stage name '{}' is not valid for the cache (1 to {} "
+                    "characters of a-z 0-9 . _ -, not starting with '.')",
+                    stage, kMaxStageChars));
 }
 
 }  // namespace

@@ -152,8 +152,8 @@ class TempDir {
  public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            fmt::format("prtlab_archive_test_{}_{}_{}", ::getpid(), info->test_suite_name(), info->name());
+    path_ = fs::temp_directory_path() / fmt::format("prtlab_archive_test_{}_{}_{}", ::getpid(),
+                                                    info->test_suite_name(), info->name());
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -178,7 +178,8 @@ std::vector<std::byte> read_file(const fs::path& p) {
 
 void write_raw(const fs::path& p, std::span<const std::byte> bytes) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 template <typename T>
@@ -358,7 +359,7 @@ TEST(Archive, ByteLayoutIsTheDocumentedOne) {
   // Header.
   ASSERT_GE(b.size(), 80u);
   EXPECT_EQ(std::memcmp(b.data(), "PRTLAB\0\1", 8), 0);
-  EXPECT_EQ(load<std::uint32_t>(b, 8), 1u);   // format version
+  EXPECT_EQ(load<std::uint32_t>(b, 8), 1u);  // format version
   const std::uint32_t header = load<std::uint32_t>(b, 12);
   EXPECT_EQ(header, 80u);  // 40 + 15 ("transfer-matrix") + 16 (metadata) = 71, padded to 16
   EXPECT_EQ(load<std::uint64_t>(b, 16), b.size());
@@ -370,7 +371,7 @@ TEST(Archive, ByteLayoutIsTheDocumentedOne) {
   EXPECT_EQ(std::memcmp(b.data() + 55, meta.data(), meta.size()), 0);
   // First section record at the header length.
   std::size_t off = header;
-  EXPECT_EQ(load<std::uint32_t>(b, off), 4u);  // name length
+  EXPECT_EQ(load<std::uint32_t>(b, off), 4u);     // name length
   EXPECT_EQ(load<std::uint8_t>(b, off + 4), 5u);  // uint32 tag
   EXPECT_EQ(load<std::uint64_t>(b, off + 8), 3u);
   EXPECT_EQ(load<std::uint64_t>(b, off + 16), 12u);
@@ -392,8 +393,10 @@ TEST(Archive, ByteLayoutIsTheDocumentedOne) {
   // script) and its first size-16 bytes hashed with `xxhsum -H2`; any change of the layout
   // must be a deliberate format version bump.
   EXPECT_EQ(b.size(), 208u);
-  EXPECT_EQ(Hash128::from_canonical_bytes(std::span<const std::byte, 16>(b.data() + b.size() - 16, 16)).hex(),
-            "226245c66bed3eaf41a647e6f8d9150a");
+  EXPECT_EQ(
+      Hash128::from_canonical_bytes(std::span<const std::byte, 16>(b.data() + b.size() - 16, 16))
+          .hex(),
+      "226245c66bed3eaf41a647e6f8d9150a");
 }
 
 // ------------------------------------------------------------------------- damaged archives
@@ -457,16 +460,18 @@ TEST_F(DamagedArchive, FlippedMagicIsNotAnArchive) {
 
 TEST_F(DamagedArchive, TruncationIsReportedWithBothLengths) {
   const std::size_t n = good_.size();
-  for (std::size_t len : {std::size_t{24}, std::size_t{40}, std::size_t{100}, n / 2, n - 32,
-                          n - 17, n - 16, n - 1}) {
-    const std::vector<std::byte> cut(good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(len));
+  for (std::size_t len :
+       {std::size_t{24}, std::size_t{40}, std::size_t{100}, n / 2, n - 32, n - 17, n - 16, n - 1}) {
+    const std::vector<std::byte> cut(good_.begin(),
+                                     good_.begin() + static_cast<std::ptrdiff_t>(len));
     const std::string err = open_modified(cut);
     EXPECT_THAT(err, HasSubstr(file_.string()));
     EXPECT_THAT(err, HasSubstr(fmt::format("truncated: expected {} bytes, file has {}", n, len)))
         << "cut at " << len;
   }
   for (std::size_t len : {1, 5, 8, 23}) {
-    const std::vector<std::byte> cut(good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(len));
+    const std::vector<std::byte> cut(good_.begin(),
+                                     good_.begin() + static_cast<std::ptrdiff_t>(len));
     EXPECT_THAT(open_modified(cut), HasSubstr(fmt::format("truncated: file has {} bytes", len)));
   }
   EXPECT_THAT(open_modified({}), HasSubstr("empty file (not a prtlab archive)"));
@@ -511,7 +516,8 @@ TEST_F(DamagedArchive, WrongKindAndNewerKindVersionAreRefused) {
               HasSubstr("'transfer-matrix' version 2 is newer than this build supports (1)"));
   EXPECT_EQ(open_error(file_, "transfer-matrix", 2), "no exception");
   const ArchiveReader r = ArchiveReader::open(file_);
-  EXPECT_THAT(error_of([&] { r.expect_kind("x"); }), HasSubstr("artifact kind is 'transfer-matrix', expected 'x'"));
+  EXPECT_THAT(error_of([&] { r.expect_kind("x"); }),
+              HasSubstr("artifact kind is 'transfer-matrix', expected 'x'"));
 }
 
 TEST_F(DamagedArchive, MissingSectionsAndWrongTypesAreNamed) {
@@ -537,7 +543,8 @@ TEST_F(DamagedArchive, MissingSectionsAndWrongTypesAreNamed) {
 TEST_F(DamagedArchive, ResealedGarbageNeverCrashesTheParser) {
   std::mt19937_64 rng(kSeed);
   ArchiveWriter w("k", 1);
-  w.add_section("a", std::vector<std::uint16_t>{1, 2, 3}).add_section("b", std::vector<double>{4.0});
+  w.add_section("a", std::vector<std::uint16_t>{1, 2, 3})
+      .add_section("b", std::vector<double>{4.0});
   const auto base = w.to_bytes();
   int refused = 0;
   for (int trial = 0; trial < 3000; ++trial) {

@@ -96,8 +96,10 @@ TEST_F(StageCacheTest, DefaultRootIsPrtlabCache) {
   ::setenv("PRTLAB_CACHE", root_.c_str(), 1);
   const StageCache cache;
   EXPECT_EQ(cache.root(), root_);
-  if (old) ::setenv("PRTLAB_CACHE", saved.c_str(), 1);
-  else ::unsetenv("PRTLAB_CACHE");
+  if (old)
+    ::setenv("PRTLAB_CACHE", saved.c_str(), 1);
+  else
+    ::unsetenv("PRTLAB_CACHE");
 }
 
 TEST_F(StageCacheTest, MissComputesAndStoresThenHitLoadsWithoutComputing) {
@@ -144,8 +146,8 @@ TEST_F(StageCacheTest, CorruptOrForeignCachedFilesAreRecomputedWithAWarning) {
   (void)cache.get_or_compute("stage", key(1), compute(1), load);
   const auto size = fs::file_size(file);
   const std::vector<std::function<void()>> damages = {
-      [&] { corrupt_byte(file, size / 2); },                             // bit rot in the payload
-      [&] { fs::resize_file(file, size - 20); },                         // truncated
+      [&] { corrupt_byte(file, size / 2); },                              // bit rot in the payload
+      [&] { fs::resize_file(file, size - 20); },                          // truncated
       [&] { std::ofstream(file, std::ios::trunc) << "not an archive"; },  // foreign file
       [&] {  // a valid archive of another key, copied into this key's place
         fs::remove(file);
@@ -177,7 +179,8 @@ TEST_F(StageCacheTest, RefreshRecomputesAndOffNeverTouchesTheCache) {
   StageCache cache(root_);
   (void)cache.get_or_compute("stage", key(1), compute(1), load);
   // Refresh: computes even though present, and the new result replaces the old.
-  const auto refreshed = cache.get_or_compute("stage", key(1), compute(2), load, CacheMode::kRefresh);
+  const auto refreshed =
+      cache.get_or_compute("stage", key(1), compute(2), load, CacheMode::kRefresh);
   EXPECT_EQ(computed_, 2);
   EXPECT_TRUE(bit_equal(refreshed, expected(2)));
   EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(1), compute(3), load), expected(2)));
@@ -205,7 +208,9 @@ TEST_F(StageCacheTest, UnwritableCacheStillReturnsTheResult) {
 
 TEST_F(StageCacheTest, ErrorsOfAFreshComputationPropagate) {
   StageCache cache(root_);
-  const StageCache::Compute failing = [] () -> ArchiveWriter { throw ParameterError("bad parameter"); };
+  const StageCache::Compute failing = []() -> ArchiveWriter {
+    throw ParameterError("bad parameter");
+  };
   EXPECT_THROW((void)cache.get_or_compute("stage", key(1), failing, load), ParameterError);
   EXPECT_FALSE(cache.contains("stage", key(1)));
   // A load that refuses what compute just produced is a bug in the stage, not a cache problem.

@@ -137,6 +137,7 @@ TEST(TransferMatrix, TiltedOpenPlaneSeesTwoPiWithinTheHorizonBound) {
     // plane through the origin, so the open-plane sum is 2 pi exactly -- provided no unblocked
     // sub-ray is dropped, which is what lifting sub-horizon centres into the rim cells ensures.
     EXPECT_NEAR(sum, kTwoPi, 1e-9);
+    RecordProperty("horizon_bound_s" + std::to_string(s), std::to_string(bound));
     if (s > 1) {
       EXPECT_GT(result.stats.horizon_lifted, 0u);
     }

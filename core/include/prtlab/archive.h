@@ -17,8 +17,6 @@
 // Versions: the archive format version (kArchiveFormatVersion) covers the container; each
 // artifact kind carries its own kind version, bumped by its owner whenever the meaning or the
 // set of its sections changes. Readers refuse newer versions than they know.
-#include <nlohmann/json.hpp>
-
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -26,6 +24,7 @@
 #include <iosfwd>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string>
 #include <string_view>
@@ -66,12 +65,11 @@ std::size_t element_size(ElementType type);
 /// Types a section can hold: fixed-size integers and IEEE floats (bool and long double are
 /// excluded; std::byte is stored as uint8).
 template <typename T>
-concept ArchiveElement =
-    std::is_same_v<T, std::byte> ||
-    (std::is_integral_v<T> && !std::is_same_v<T, bool> &&
-     (sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8)) ||
-    (std::is_floating_point_v<T> && std::numeric_limits<T>::is_iec559 &&
-     (sizeof(T) == 4 || sizeof(T) == 8));
+concept ArchiveElement = std::is_same_v<T, std::byte> ||
+                         (std::is_integral_v<T> && !std::is_same_v<T, bool> &&
+                          (sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8)) ||
+                         (std::is_floating_point_v<T> && std::numeric_limits<T>::is_iec559 &&
+                          (sizeof(T) == 4 || sizeof(T) == 8));
 
 template <ArchiveElement T>
 constexpr ElementType element_type_of() {
@@ -82,10 +80,14 @@ constexpr ElementType element_type_of() {
   } else {
     constexpr bool s = std::is_signed_v<T>;
     switch (sizeof(T)) {
-      case 1: return s ? ElementType::kInt8 : ElementType::kUInt8;
-      case 2: return s ? ElementType::kInt16 : ElementType::kUInt16;
-      case 4: return s ? ElementType::kInt32 : ElementType::kUInt32;
-      default: return s ? ElementType::kInt64 : ElementType::kUInt64;
+      case 1:
+        return s ? ElementType::kInt8 : ElementType::kUInt8;
+      case 2:
+        return s ? ElementType::kInt16 : ElementType::kUInt16;
+      case 4:
+        return s ? ElementType::kInt32 : ElementType::kUInt32;
+      default:
+        return s ? ElementType::kInt64 : ElementType::kUInt64;
     }
   }
 }
@@ -116,7 +118,8 @@ class ArchiveWriter {
   /// Adds a section. name: 1..255 bytes, unique in the archive (ParameterError otherwise).
   template <ArchiveElement T>
   ArchiveWriter& add_section(std::string name, std::span<const T> values) {
-    return add_vector<T>(std::move(name), std::make_shared<std::vector<T>>(values.begin(), values.end()));
+    return add_vector<T>(std::move(name),
+                         std::make_shared<std::vector<T>>(values.begin(), values.end()));
   }
   template <ArchiveElement T>
   ArchiveWriter& add_section(std::string name, const std::vector<T>& values) {
@@ -142,7 +145,7 @@ class ArchiveWriter {
   /// Streams the archive; `name` is used in error messages.
   void write_to(std::ostream& out, const std::filesystem::path& name) const;
 
- /// Receives the archive bytes in order (internal; public so the implementation can name it).
+  /// Receives the archive bytes in order (internal; public so the implementation can name it).
   using Sink = std::function<void(std::span<const std::byte>)>;
 
  private:

@@ -17,14 +17,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <glm/fwd.hpp>
 #include <memory>
 #include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
 #include <vector>
-
-#include <glm/fwd.hpp>
 
 namespace prt {
 
@@ -51,9 +50,8 @@ struct Hash128 {
 /// padding (std::has_unique_object_representations) and glm vectors of arithmetic types
 /// (no padding either). Specialise for your own padding-free aggregates if needed.
 template <typename T>
-inline constexpr bool kHashableAsBytes =
-    (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) ||
-    std::has_unique_object_representations_v<T>;
+inline constexpr bool kHashableAsBytes = (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) ||
+                                         std::has_unique_object_representations_v<T>;
 template <glm::length_t L, typename T, glm::qualifier Q>
 inline constexpr bool kHashableAsBytes<glm::vec<L, T, Q>> =
     std::is_arithmetic_v<T> && sizeof(glm::vec<L, T, Q>) == L * sizeof(T);
@@ -74,8 +72,7 @@ class Hasher {
 
   /// A scalar by its fixed-width little-endian bytes. bool is hashed as one byte 0/1.
   template <typename T>
-    requires std::is_arithmetic_v<T>
-  Hasher& add(T value) {
+  requires std::is_arithmetic_v<T> Hasher& add(T value) {
     if constexpr (std::is_same_v<T, bool>) {
       const std::uint8_t b = value ? 1 : 0;
       return add(std::as_bytes(std::span(&b, 1)));
@@ -94,15 +91,13 @@ class Hasher {
 
   /// An array: u64 element count, u64 element size, then the element bytes.
   template <typename T>
-    requires kHashableAsBytes<T>
-  Hasher& add_array(std::span<const T> values) {
+  requires kHashableAsBytes<T> Hasher& add_array(std::span<const T> values) {
     add(static_cast<std::uint64_t>(values.size()));
     add(static_cast<std::uint64_t>(sizeof(T)));
     return add(std::as_bytes(values));
   }
   template <typename T>
-    requires kHashableAsBytes<T>
-  Hasher& add_array(const std::vector<T>& values) {
+  requires kHashableAsBytes<T> Hasher& add_array(const std::vector<T>& values) {
     return add_array(std::span<const T>(values));
   }
 
