@@ -182,8 +182,9 @@ void BM_TransferPrecompute(benchmark::State& state) {
   state.counters["s_setup"] = stats.seconds_setup;
   state.counters["s_points"] = stats.seconds_points;
   state.counters["s_assemble"] = stats.seconds_assemble;
-  state.counters["thr_s_trace"] = stats.thread_seconds_trace;
-  state.counters["thr_s_bin"] = stats.thread_seconds_bin;
+  state.counters["Mrays/cpu_s"] = stats.rays_per_trace_cpu_second() * 1e-6;
+  state.counters["cpu_s_trace"] = stats.thread_seconds_trace;
+  state.counters["cpu_s_bin"] = stats.thread_seconds_bin;
   state.counters["threads"] = stats.threads;
   state.SetLabel(d.source);
 }

@@ -5,7 +5,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
+
+#include "prtlab/cl_context.h"
 
 namespace prt::cli {
 
@@ -13,6 +16,9 @@ namespace prt::cli {
 struct GlobalOptions {
   bool quiet = false;
   bool verbose = false;
+  std::string device;          ///< --device (else $PRTLAB_DEVICE, else first GPU, else PoCL)
+  bool strict_device = false;  ///< --strict-device: fail instead of falling back
+  bool no_opencl = false;      ///< --no-opencl: C++ reference paths only
 };
 GlobalOptions& global_options();
 
@@ -25,5 +31,9 @@ void set_command_line(int argc, char** argv);
 void add_scene_commands(CLI::App& app);
 void add_env_commands(CLI::App& app);
 void add_transfer_commands(CLI::App& app);
+void add_backend_commands(CLI::App& app);
+
+/// The OpenCL context the global options ask for; nullopt with --no-opencl or without OpenCL.
+std::optional<ClContext> open_device_from_options();
 
 }  // namespace prt::cli

@@ -17,6 +17,11 @@ int main(int argc, char** argv) {
   auto& g = cli::global_options();
   app.add_flag("-q,--quiet", g.quiet, "No progress bars or info messages");
   app.add_flag("-v,--verbose", g.verbose, "Debug messages");
+  app.add_option("--device", g.device,
+                 "OpenCL device: gpu, cpu, pocl, nvidia, P:D (platform:device) or a name substring "
+                 "(default: $PRTLAB_DEVICE, else the first GPU, else PoCL's CPU device)");
+  app.add_flag("--strict-device", g.strict_device, "Fail instead of falling back when the device is not found");
+  app.add_flag("--no-opencl", g.no_opencl, "Run the C++ reference paths only");
   app.parse_complete_callback([&] {
     if (g.quiet) {
       Progress::set_quiet(true);
@@ -28,6 +33,7 @@ int main(int argc, char** argv) {
   cli::add_scene_commands(app);
   cli::add_env_commands(app);
   cli::add_transfer_commands(app);
+  cli::add_backend_commands(app);
 
   try {
     app.parse(argc, argv);

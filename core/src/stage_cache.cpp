@@ -1,5 +1,10 @@
 #include "prtlab/stage_cache.h"
 
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
 #include "prtlab/data_paths.h"
 #include "prtlab/error.h"
 #include "prtlab/log.h"
@@ -19,6 +24,24 @@ void validate_stage(std::string_view stage) {
         fmt::format("stage name '{}' is not valid for the cache (1 to {} "
                     "characters of a-z 0-9 . _ -, not starting with '.')",
                     stage, kMaxStageChars));
+}
+
+// One mutex per cache file, process-wide (whatever StageCache object asks): a second thread
+// asking for an entry being computed waits and then hits, instead of computing it again and
+// racing on the shared temporary file name "<file>.tmp.<pid>".
+std::shared_ptr<std::mutex> entry_lock(const std::filesystem::path& file) {
+  static std::mutex registry_mutex;
+  static std::map<std::string, std::weak_ptr<std::mutex>> registry;
+  const std::lock_guard guard(registry_mutex);
+  if (registry.size() > 4096)
+    std::erase_if(registry, [](const auto& e) { return e.second.expired(); });
+  std::weak_ptr<std::mutex>& slot = registry[file.string()];
+  std::shared_ptr<std::mutex> lock = slot.lock();
+  if (!lock) {
+    lock = std::make_shared<std::mutex>();
+    slot = lock;
+  }
+  return lock;
 }
 
 }  // namespace
@@ -43,6 +66,8 @@ StageCache::Stats StageCache::stats() const {
 void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute& compute,
                        const Consume& consume, CacheMode mode) {
   const std::filesystem::path file = path_for(stage, key);
+  const std::shared_ptr<std::mutex> lock = entry_lock(file);
+  const std::lock_guard guard(*lock);
   if (mode == CacheMode::kUse && contains(stage, key)) {
     try {
       const ArchiveReader reader = ArchiveReader::open(file);

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 
 #include "prtlab/cubemap.h"
@@ -152,6 +153,63 @@ TransferMatrix TransferMatrix::from_csr(std::size_t vertices, int local_count, i
 }
 
 // ---------------------------------------------------------------------------------------------
+// CellLookup
+
+namespace {
+constexpr std::uint8_t kDefer = 255;
+constexpr int kBelow = -2;
+}  // namespace
+
+CellLookup::CellLookup(const HemisphereGrid& grid, int resolution) : grid_(&grid), q_(resolution) {
+  PRT_CHECK(resolution >= 4, "cell lookup resolution {} too small", resolution);
+  const int q = q_;
+  table_.assign(static_cast<std::size_t>(6) * q * q, kDefer);
+  // With M >= 255 every lookup defers (cells would not fit the byte table).
+  if (grid.cell_count() >= kDefer) {
+    deferred_ = 1.0;
+    return;
+  }
+  std::vector<int> corner(static_cast<std::size_t>(q + 1) * (q + 1));
+  std::size_t upper = 0, deferred = 0;
+  for (int face = 0; face < 5; ++face) {  // face 5 (-z) is wholly below the horizon
+    tbb::parallel_for(0, q + 1, [&](int j) {
+      for (int i = 0; i <= q; ++i) {
+        const Vec3d d = CubemapLayout::face_direction(face, 2.0 * i / q - 1.0, 2.0 * j / q - 1.0);
+        corner[static_cast<std::size_t>(j) * (q + 1) + i] = d.z > 0.0 ? grid.cell_of(d) : kBelow;
+      }
+    });
+    for (int j = 0; j < q; ++j) {
+      for (int i = 0; i < q; ++i) {
+        const int c = corner[static_cast<std::size_t>(j) * (q + 1) + i];
+        if (c == kBelow) continue;  // not an upper-hemisphere texel
+        ++upper;
+        bool same = i >= 1 && j >= 1 && i + 2 <= q && j + 2 <= q;
+        for (int jj = j - 1; same && jj <= j + 2; ++jj)
+          for (int ii = i - 1; same && ii <= i + 2; ++ii) same = corner[static_cast<std::size_t>(jj) * (q + 1) + ii] == c;
+        if (same) {
+          table_[(static_cast<std::size_t>(face) * q + j) * q + i] = static_cast<std::uint8_t>(c);
+        } else {
+          ++deferred;
+        }
+      }
+    }
+  }
+  deferred_ = upper ? static_cast<double>(deferred) / static_cast<double>(upper) : 1.0;
+}
+
+int CellLookup::cell_of(const Vec3d& l) const {
+  int face;
+  double s, t;
+  CubemapLayout::face_coords(l, face, s, t);
+  const int i = std::clamp(static_cast<int>((s + 1.0) * 0.5 * q_), 0, q_ - 1);
+  const int j = std::clamp(static_cast<int>((t + 1.0) * 0.5 * q_), 0, q_ - 1);
+  const std::uint8_t c = table_[(static_cast<std::size_t>(face) * q_ + j) * q_ + i];
+  if (c == kDefer) return grid_->cell_of(l);
+  PRT_DCHECK(c == grid_->cell_of(l), "cell lookup disagrees with cell_of at ({}, {}, {})", l.x, l.y, l.z);
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
 // compute_transfer
 
 namespace {
@@ -183,6 +241,14 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// CPU time of the calling thread: phase times stay meaningful on a loaded machine, where
+// wall-clock per thread would include time spent preempted.
+std::int64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
 }  // namespace
 
 TransferResult compute_transfer(const Mesh& mesh, const TransferParams& params) {
@@ -207,6 +273,7 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
   if (grid.cell_count() > 65535) throw ParameterError("compute_transfer: M = S^2 must be below 65536");
   const int m = grid.cell_count();
   const int n = layout.pixel_count();
+  const CellLookup cells(grid);
 
   const EmbreeScene scene(occluders, params.ray_offset_relative);
   std::optional<ShTransferIntegrator> sh_integrator;
@@ -243,10 +310,10 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
       s.vis.resize(static_cast<std::size_t>(n));
       for (std::size_t p = range.begin(); p != range.end(); ++p) {
         const SurfacePoint& point = points[p];
-        const auto t0 = std::chrono::steady_clock::now();
+        const std::int64_t t0 = thread_cpu_ns();
         const std::uint64_t rays =
             scene.visibility(dirs, point.position, point.frame.n, s.vis, sh_integrator ? &s.unblocked : nullptr);
-        const auto t1 = std::chrono::steady_clock::now();
+        const std::int64_t t1 = thread_cpu_ns();
 
         // Bin the visible pixels into local cells, then counting-sort by cell: visiting k in
         // increasing order leaves every row sorted by column.
@@ -266,7 +333,7 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
             l = Vec3d(l.x / h, l.y / h, kLiftZ);
             ++point_lifted;
           }
-          const int j = grid.cell_of(l);
+          const int j = cells.cell_of(l);
           PRT_CHECK(j >= 0, "point {}: pixel {} has no local cell", p, k);
           s.entry_col.push_back(static_cast<std::uint32_t>(k));
           s.entry_count.push_back(c);
@@ -288,17 +355,17 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
           block.cols[at] = s.entry_col[e];
           block.counts[at] = s.entry_count[e];
         }
-        const auto t2 = std::chrono::steady_clock::now();
+        const std::int64_t t2 = thread_cpu_ns();
 
         if (sh_integrator) sh_integrator->integrate(point.frame, s.unblocked, result.sh->mutable_matrix(p), s.sh);
-        const auto t3 = std::chrono::steady_clock::now();
+        const std::int64_t t3 = thread_cpu_ns();
 
         traced.fetch_add(rays, std::memory_order_relaxed);
         unblocked_total.fetch_add(point_unblocked, std::memory_order_relaxed);
         lifted.fetch_add(point_lifted, std::memory_order_relaxed);
-        ns_trace.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count(), std::memory_order_relaxed);
-        ns_bin.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(t2 - t1).count(), std::memory_order_relaxed);
-        ns_sh.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(t3 - t2).count(), std::memory_order_relaxed);
+        ns_trace.fetch_add(t1 - t0, std::memory_order_relaxed);
+        ns_bin.fetch_add(t2 - t1, std::memory_order_relaxed);
+        ns_sh.fetch_add(t3 - t2, std::memory_order_relaxed);
         progress.advance(1);
       }
     });

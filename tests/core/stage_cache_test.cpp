@@ -7,10 +7,13 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <bit>
+#include <chrono>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "prtlab/log.h"
@@ -193,6 +196,27 @@ TEST_F(StageCacheTest, RefreshRecomputesAndOffNeverTouchesTheCache) {
   EXPECT_EQ(computed_, 4);
   EXPECT_FALSE(cache.contains("stage", key(9)));
   EXPECT_TRUE(bit_equal(cache.get_or_compute("stage", key(1), compute(5), load), expected(2)));
+}
+
+TEST_F(StageCacheTest, ConcurrentRequestsForOneEntryComputeItOnce) {
+  std::atomic<int> calls{0};
+  const StageCache::Compute slow = [&] {
+    ++calls;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // widen the race window
+    ArchiveWriter w("test-stage", 1);
+    w.add_section("values", expected(3));
+    return w;
+  };
+  StageCache a(root_), b(root_);  // two cache objects: the lock is per file, not per object
+  std::vector<std::vector<float>> results(4);
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < results.size(); ++i)
+    threads.emplace_back(
+        [&, i] { results[i] = (i % 2 ? a : b).get_or_compute("stage", key(3), slow, load); });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(calls.load(), 1);
+  for (const auto& r : results) EXPECT_TRUE(bit_equal(r, expected(3)));
+  EXPECT_EQ(a.stats().hits + b.stats().hits, 3);
 }
 
 TEST_F(StageCacheTest, UnwritableCacheStillReturnsTheResult) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 
 #include "prtlab/cubemap.h"
@@ -198,6 +199,43 @@ TEST(TransferMatrix, BlocksHaveOneNonZeroPerColumnAndExactValues) {
     EXPECT_EQ(count_sum, result.stats.rays_unblocked);  // every escaped sub-ray is in T once
     EXPECT_EQ(t.memory_bytes(), (t.rows() + 1) * 4 + t.nnz() * 3);
     EXPECT_EQ(t.dense_bytes(), t.rows() * t.cols());
+  }
+}
+
+TEST(CellLookup, AgreesWithCellOfEverywhere) {
+  for (int side : {1, 8, 12}) {
+    const HemisphereGrid grid(side);
+    const CellLookup lookup(grid);
+    if (side > 1) {
+      EXPECT_LT(lookup.deferred_fraction(), 0.25) << "S = " << side;
+    }
+    std::mt19937_64 rng(7 + side);
+    std::normal_distribution<double> g;
+    for (int i = 0; i < 100000; ++i) {
+      Vec3d d{g(rng), g(rng), std::abs(g(rng)) + 1e-12};
+      d = glm::normalize(d);
+      ASSERT_EQ(lookup.cell_of(d), grid.cell_of(d)) << d.x << " " << d.y << " " << d.z;
+    }
+    // Directions a hair from cell boundaries: images of the square's grid lines, and the
+    // horizon (lifted directions have z = 1e-9).
+    for (int line = 0; line <= side; ++line) {
+      for (int step = 0; step < 2000; ++step) {
+        for (double eps : {-1e-7, 1e-7}) {
+          const double a = std::clamp(static_cast<double>(line) / side + eps, 0.0, 1.0);
+          const double b = (step + 0.5) / 2000;
+          for (const Vec2d ab : {Vec2d(a, b), Vec2d(b, a)}) {
+            const Vec3d d = square_to_hemisphere(ab);
+            if (!(d.z > 0.0)) continue;
+            ASSERT_EQ(lookup.cell_of(d), grid.cell_of(d)) << ab.x << " " << ab.y;
+          }
+        }
+      }
+    }
+    for (int step = 0; step < 10000; ++step) {
+      const double phi = kTwoPi * step / 10000;
+      const Vec3d d{std::cos(phi), std::sin(phi), 1e-9};
+      ASSERT_EQ(lookup.cell_of(d), grid.cell_of(d)) << phi;
+    }
   }
 }
 

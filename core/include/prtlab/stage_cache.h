@@ -17,7 +17,9 @@
 //     warning and recomputed, never used;
 //   - if the cache cannot be written (read-only, disk full), the stage still returns its
 //     result (with a warning) from memory.
-// Two processes computing the same key at once both succeed; the last rename wins.
+// Thread-safe: threads asking for the same entry are serialised (the second one hits), other
+// entries proceed in parallel. Two processes computing the same key at once both succeed; the
+// last rename wins.
 #include <atomic>
 #include <filesystem>
 #include <functional>

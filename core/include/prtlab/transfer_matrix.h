@@ -33,6 +33,29 @@
 
 namespace prt {
 
+class HemisphereGrid;
+
+/// HemisphereGrid::cell_of for many lookups, with identical results. A table over a cube map
+/// of the local frame (256^2 texels per face) holds a texel's cell when the 4 x 4 texel
+/// corners of its 3 x 3 neighbourhood all lie in that cell; since that neighbourhood strictly
+/// contains the texel and the cell boundaries are smooth at this scale (curvature radius far
+/// above a texel), no boundary crosses such a texel. Other texels (cell boundaries, the
+/// horizon, face edges: about a tenth) defer to cell_of.
+class CellLookup {
+ public:
+  explicit CellLookup(const HemisphereGrid& grid, int resolution = 256);
+  /// Cell of local direction l (z > 0), exactly as grid.cell_of(l).
+  int cell_of(const Vec3d& l) const;
+  /// Fraction of the upper-hemisphere texels that defer to cell_of.
+  double deferred_fraction() const { return deferred_; }
+
+ private:
+  const HemisphereGrid* grid_;
+  int q_;
+  std::vector<std::uint8_t> table_;  ///< 6 faces x q x q; kDefer where undecided
+  double deferred_ = 0.0;
+};
+
 class TransferMatrix {
  public:
   TransferMatrix() = default;
@@ -116,11 +139,16 @@ struct TransferStats {
   double seconds_setup = 0;          ///< BVH build and direction / SH tables (wall)
   double seconds_points = 0;         ///< the parallel per-point pass (wall)
   double seconds_assemble = 0;       ///< serial appends of the per-point blocks (wall)
-  double thread_seconds_trace = 0;   ///< summed over threads: Embree occlusion packets
-  double thread_seconds_bin = 0;     ///< summed over threads: pixel -> local cell, block sort
-  double thread_seconds_sh = 0;      ///< summed over threads: SH transfer quadrature
+  // CPU seconds summed over threads (CLOCK_THREAD_CPUTIME_ID, so not inflated by a loaded machine):
+  double thread_seconds_trace = 0;   ///< Embree occlusion packets
+  double thread_seconds_bin = 0;     ///< pixel -> local cell, block sort
+  double thread_seconds_sh = 0;      ///< SH transfer quadrature
   /// Traced rays per second of the per-point pass (wall clock, all threads).
   double rays_per_second() const { return seconds_points > 0 ? rays_traced / seconds_points : 0.0; }
+  /// Traced rays per CPU second of tracing (one thread's throughput).
+  double rays_per_trace_cpu_second() const {
+    return thread_seconds_trace > 0 ? rays_traced / thread_seconds_trace : 0.0;
+  }
 };
 
 struct TransferResult {

@@ -1,0 +1,187 @@
+#include "uncompressed/uncompressed.h"
+
+#include <bit>
+
+#include "prtlab/archive.h"
+#include "prtlab/cl_device.h"
+#include "prtlab/error.h"
+#include "prtlab/exact_relight.h"
+
+namespace prt::uncompressed {
+namespace {
+
+class UncompressedCompressor final : public Compressor {
+ public:
+  explicit UncompressedCompressor(Options options) : options_(options) {}
+
+  std::unique_ptr<CompressedTransfer> compress(const TransferInput& input, Progress& progress) const override {
+    const TransferMatrix& t = input.transfer;
+    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
+        t.local_count() != input.grid.cell_count()) {
+      throw ParameterError(fmt::format("{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}",
+                                       kName, t.local_count(), t.cols(), input.grid.cell_count(),
+                                       input.cubemap.pixel_count()));
+    }
+    auto out = std::make_unique<UncompressedTransfer>(t, options_);
+    progress.finish();
+    return out;
+  }
+
+ private:
+  Options options_;
+};
+
+Options options_from(const ParamSet& params) {
+  Options o;
+  o.kernel = parse_variant(params.get_string("opencl_kernel"));
+  o.lanes = static_cast<int>(params.get_int("opencl_lanes"));
+  // The range is checked by ParamSet; the power of two is the reduction's requirement.
+  if (!std::has_single_bit(static_cast<unsigned>(o.lanes)))
+    throw ParameterError(fmt::format("{}: parameter opencl_lanes={}: must be a power of two (1, 2, 4, ..., 32)",
+                                     kName, o.lanes));
+  return o;
+}
+
+std::string column_type(const TransferMatrix& t) { return t.narrow_columns() ? "u16" : "u32"; }
+
+}  // namespace
+
+KernelVariant parse_variant(const std::string& text) {
+  if (text == "auto") return KernelVariant::kAuto;
+  if (text == "rows") return KernelVariant::kRows;
+  if (text == "lanes") return KernelVariant::kLanes;
+  throw ParameterError(fmt::format("{}: opencl_kernel '{}' is not one of auto, rows, lanes", kName, text));
+}
+
+std::string_view to_string(KernelVariant v) {
+  switch (v) {
+    case KernelVariant::kAuto: return "auto";
+    case KernelVariant::kRows: return "rows";
+    case KernelVariant::kLanes: return "lanes";
+  }
+  return "?";
+}
+
+KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device) {
+  if (requested != KernelVariant::kAuto) return requested;
+  // Measured on PoCL (docs/backends/uncompressed.md): a work-item per row matches the C++ loop,
+  // lanes cost barriers that PoCL turns into work-item loops. On GPUs, lanes give coalesced reads.
+  return device.is_cpu ? KernelVariant::kRows : KernelVariant::kLanes;
+}
+
+UncompressedTransfer::UncompressedTransfer(TransferMatrix transfer, Options options)
+    : t_(std::move(transfer)), options_(options) {}
+
+StorageReport UncompressedTransfer::storage() const {
+  const std::uint64_t nnz = t_.nnz();
+  const std::uint64_t col_bytes = t_.narrow_columns() ? 2 : 4;
+  StorageReport r;
+  r.components.push_back({"row_offsets", (t_.rows() + 1) * std::uint64_t{4},
+                          "u32 per row + 1: index of the row's first entry in columns/counts (CSR), last = nnz"});
+  r.components.push_back({"columns", nnz * col_bytes,
+                          fmt::format("{} per non-zero: global pixel k (cubemap order), strictly increasing in a row",
+                                      column_type(t_))});
+  r.components.push_back({"counts", nnz, "u8 per non-zero: unblocked sub-rays c in 1..s^2; value = c * scale"});
+  r.components.push_back({"scale", 4, "f32 once: the value of a count of 1, 1/s^2 (stored as s in the metadata)"});
+  return r;
+}
+
+LightCoeffs UncompressedTransfer::project_light(const Cubemap& radiance) const {
+  if (static_cast<std::size_t>(radiance.layout.pixel_count()) != t_.cols()) {
+    throw ParameterError(fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
+                                     radiance.layout.pixel_count(), radiance.layout.resolution(), t_.cols()));
+  }
+  return {"pixel", radiance.light_vector()};
+}
+
+void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
+  if (light.basis != "pixel" || light.values.size() != t_.cols()) {
+    throw ParameterError(fmt::format("{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}",
+                                     kName, t_.cols(), light.basis, light.values.size()));
+  }
+  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() || out.vertices != t_.vertex_count() ||
+      out.values.size() != t_.rows()) {
+    out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
+  }
+  relight_exact(t_, light.values, out.values);
+}
+
+std::unique_ptr<DeviceRelighter> UncompressedTransfer::upload(ClContext& context) const {
+  return upload_transfer(context, t_, options_);
+}
+
+void UncompressedTransfer::save(ArchiveWriter& archive) const {
+  archive.add_meta("uncompressed_version", kStateVersion);
+  archive.add_meta("vertices", t_.vertex_count());
+  archive.add_meta("local_count", t_.local_count());
+  archive.add_meta("pixel_count", t_.cols());
+  archive.add_meta("supersampling", t_.supersampling());
+  archive.add_meta("opencl_kernel", std::string(to_string(options_.kernel)));
+  archive.add_meta("opencl_lanes", options_.lanes);
+  archive.add_section("row_offsets", t_.row_offsets());
+  if (t_.narrow_columns()) {
+    archive.add_section("columns", t_.columns16());
+  } else {
+    archive.add_section("columns", t_.columns32());
+  }
+  archive.add_section("counts", t_.counts());
+}
+
+std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveReader& r) {
+  const int version = r.meta_value<int>("uncompressed_version");
+  if (version != kStateVersion)
+    throw InputError(r.path(), fmt::format("{} state version {} is not the version {} this build reads", kName, version,
+                                           kStateVersion));
+  const auto vertices = r.meta_value<std::size_t>("vertices");
+  const int m = r.meta_value<int>("local_count");
+  const int n = r.meta_value<int>("pixel_count");
+  const int s = r.meta_value<int>("supersampling");
+  Options options;
+  try {
+    options.kernel = parse_variant(r.meta_value<std::string>("opencl_kernel"));
+  } catch (const ParameterError& e) {
+    throw InputError(r.path(), e.what());
+  }
+  options.lanes = r.meta_value<int>("opencl_lanes");
+  if (options.lanes < 1 || options.lanes > 32 || !std::has_single_bit(static_cast<unsigned>(options.lanes)))
+    throw InputError(r.path(), fmt::format("{}: opencl_lanes {} is not a power of two in [1, 32]", kName, options.lanes));
+
+  std::vector<std::uint32_t> columns;
+  const SectionInfo& info = r.section_info("columns");
+  if (info.type == ElementType::kUInt16) {
+    const auto c16 = r.view<std::uint16_t>("columns");
+    columns.assign(c16.begin(), c16.end());
+  } else {
+    columns = r.section<std::uint32_t>("columns");
+  }
+  try {
+    TransferMatrix t = TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"), columns,
+                                                r.section<std::uint8_t>("counts", columns.size()));
+    return std::make_unique<UncompressedTransfer>(std::move(t), options);
+  } catch (const ParameterError& e) {
+    throw InputError(r.path(), e.what());
+  }
+}
+
+CompressorEntry registry_entry() {
+  CompressorEntry e;
+  e.name = std::string(kName);
+  e.description = "exact CSR transfer (u32 row offsets, u16 columns, u8 counts x 1/s^2): the lossless reference";
+  e.params = {
+      {"opencl_kernel", ParamType::kString, "auto", std::nullopt, std::nullopt, {"auto", "rows", "lanes"},
+       "OpenCL variant: rows = one work-item per row (CPUs), lanes = opencl_lanes work-items per row with a "
+       "local-memory reduction (GPUs), auto = by device type"},
+      {"opencl_lanes", ParamType::kInt, "8", 1.0, 32.0, {},
+       "work-items per row of the lanes variant (a power of two)"},
+  };
+  e.lossless = true;
+  e.create = [](const ParamSet& params) -> std::unique_ptr<Compressor> {
+    return std::make_unique<UncompressedCompressor>(options_from(params));
+  };
+  e.load = &UncompressedTransfer::load;
+  return e;
+}
+
+PRT_REGISTER_COMPRESSOR(registry_entry);
+
+}  // namespace prt::uncompressed

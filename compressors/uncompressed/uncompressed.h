@@ -1,0 +1,71 @@
+#pragma once
+// Backend `uncompressed`: the exact CSR transfer T, stored as it is computed (u32 row offsets,
+// u16 or u32 column ids, u8 counts times one scale 1/s^2). The reference every other backend is
+// measured against, and the speed baseline for relighting (docs/backends/uncompressed.md).
+//
+// Parameters (besides the shared "seed", which nothing here uses: the backend is deterministic):
+//   opencl_kernel  auto | rows | lanes   which OpenCL variant upload() builds; auto picks by
+//                                        device type (rows on CPUs, lanes on GPUs)
+//   opencl_lanes   1..32, a power of two lanes per row of the `lanes` variant
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "prtlab/compressor.h"
+#include "prtlab/compressor_registry.h"
+#include "prtlab/transfer_matrix.h"
+
+namespace prt {
+
+struct DeviceInfo;
+
+namespace uncompressed {
+
+inline constexpr std::string_view kName = "uncompressed";
+/// Version of this backend's archive sections and metadata (bumped when they change).
+inline constexpr int kStateVersion = 1;
+
+enum class KernelVariant { kAuto, kRows, kLanes };
+KernelVariant parse_variant(const std::string& text);  ///< "auto", "rows", "lanes"
+std::string_view to_string(KernelVariant v);
+/// The variant `kAuto` resolves to on a device (rows on CPUs, lanes otherwise).
+KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device);
+
+struct Options {
+  KernelVariant kernel = KernelVariant::kAuto;
+  int lanes = 8;  ///< power of two in [1, 32]
+};
+
+class UncompressedTransfer final : public CompressedTransfer {
+ public:
+  UncompressedTransfer(TransferMatrix transfer, Options options);
+  /// The state written by save() (InputError naming the file when it is inconsistent).
+  static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
+
+  const TransferMatrix& matrix() const { return t_; }
+  const Options& options() const { return options_; }
+
+  std::string backend() const override { return std::string(kName); }
+  StorageReport storage() const override;
+  double flops_per_relight() const override { return 2.0 * static_cast<double>(t_.nnz()); }
+  double declared_error_bound() const override { return 0.0; }
+  LightCoeffs project_light(const Cubemap& radiance) const override;
+  void relight(const LightCoeffs& light, LocalRadiance& out) const override;
+  std::unique_ptr<DeviceRelighter> upload(ClContext& context) const override;
+  void save(ArchiveWriter& archive) const override;
+
+ private:
+  TransferMatrix t_;
+  Options options_;
+};
+
+/// T resident on `context`'s device, relit by the variant `options` asks for (resolved with
+/// resolve_variant). The context must outlive the returned relighter.
+std::unique_ptr<DeviceRelighter> upload_transfer(ClContext& context, const TransferMatrix& transfer,
+                                                 const Options& options);
+
+/// The registry entry (registered by uncompressed.cpp).
+CompressorEntry registry_entry();
+
+}  // namespace uncompressed
+}  // namespace prt

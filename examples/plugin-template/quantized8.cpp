@@ -1,0 +1,362 @@
+// quantized8: an out-of-tree prtlab compressor, built as a plugin against an installed (or a
+// build-tree) prtlab. It is the template of docs/adding-a-compressor.md: copy this folder, rename
+// the backend, replace the method. Everything a backend needs is in this one file: parameters,
+// compression, storage accounting, FLOP count, error bound, C++ relight, OpenCL relight (kernel
+// source embedded below), save/load, and the two extern "C" entry points prtlab looks for.
+//
+// Method. The exact transfer T stores every entry as a visibility count c in 1..s^2 with the
+// common scale 1/s^2 (transfer_matrix.h). quantized8 keeps T's sparsity (CSR, u16 column
+// indices) and stores each entry as a u8 code times a per-row step:
+//
+//   Q = 2^bits - 1 levels, cmax = the row's largest count
+//   cmax <= Q:  code = c, step = 1/s^2                          (exact)
+//   cmax >  Q:  code = round(c Q / cmax), step = cmax / (Q s^2)  (entries with code 0 are dropped)
+//
+// With bits = 8 every T prtlab computes (s <= 15) is stored exactly. Fewer bits trade accuracy
+// for fewer entries (and so fewer bytes and FLOPs) wherever a row's counts exceed the levels,
+// e.g. bits = 1 keeps only the entries of at least half the row's largest, all at that value.
+//
+// Error bound. For an entry of exact value v stored as v', let rho = max |v' - v| / v over all
+// entries (a dropped entry has rho = 1). For any light with non-negative channels,
+//   |(T' L - T L)_i| <= sum_k |v'_ik - v_ik| L_k <= rho sum_k v_ik L_k = rho (T L)_i
+// per row and channel, hence ||T' L - T L||_2 <= rho ||T L||_2: rho is the relative L2 bound
+// declared (0 when nothing was rounded), computed exactly at compression time and saved.
+#include <prtlab/archive.h>
+#include <prtlab/cl_runtime.h>
+#include <prtlab/compressor.h>
+#include <prtlab/compressor_registry.h>
+#include <prtlab/error.h>
+#include <prtlab/transfer_matrix.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+// Only the two entry points leave the library: the template is compiled with hidden visibility
+// and its copy of prtlab_core is kept private (CMakeLists.txt), so nothing here can clash with
+// the symbols of the prtlab executable that loads it.
+#define QUANTIZED8_EXPORT extern "C" __attribute__((visibility("default")))
+
+namespace quantized8 {
+namespace {
+
+constexpr const char* kName = "quantized8";
+// Bumped when the saved sections or their meaning change; load() refuses other versions.
+constexpr int kFormatVersion = 1;
+constexpr std::size_t kWorkGroup = 64;
+
+// The OpenCL kernel. A plugin cannot add files to prtlab's kernels/ folder, so it carries its
+// source and builds it with prt::build_program_source(), which prepends prtlab's prelude
+// (PRT_GUARD, prt_store_rgb3, PRT_WG_SIZE) and caches the program like any built-in kernel.
+// One work-item per row; two independent accumulators, in the same order as relight_rows() so
+// that both paths agree to float rounding.
+constexpr std::string_view kKernelSource = R"CLC(
+__kernel void quantized8_relight(const uint rows, __global const uint* offsets,
+                                 __global const ushort* columns, __global const uchar* codes,
+                                 __global const float* row_step, __global const float4* light,
+                                 __global float* out) {
+  const uint row = get_global_id(0);
+  PRT_GUARD(row, rows);
+  const uint end = offsets[row + 1];
+  uint k = offsets[row];
+  float4 acc0 = (float4)(0.0f);
+  float4 acc1 = (float4)(0.0f);
+  for (; k + 1 < end; k += 2) {
+    acc0 += (float)codes[k] * light[columns[k]];
+    acc1 += (float)codes[k + 1] * light[columns[k + 1]];
+  }
+  if (k < end) acc0 += (float)codes[k] * light[columns[k]];
+  prt_store_rgb3(out, row, row_step[row] * (acc0 + acc1));
+}
+)CLC";
+
+/// The compressed arrays, shared by the C++ and the OpenCL paths.
+struct Arrays {
+  std::size_t vertices = 0;
+  int local_count = 0;  // M
+  int pixel_count = 0;  // N
+  int bits = 8;
+  double error_bound = 0;              // rho of the header comment
+  std::vector<std::uint32_t> offsets;  // rows + 1
+  std::vector<std::uint16_t> columns;  // nnz
+  std::vector<std::uint8_t> codes;     // nnz
+  std::vector<float> row_step;         // rows
+
+  std::size_t rows() const { return row_step.size(); }
+  std::size_t nnz() const { return codes.size(); }
+};
+
+void check_light(const Arrays& a, const prt::LightCoeffs& light) {
+  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(a.pixel_count))
+    throw prt::ParameterError(fmt::format(
+        "{}: expected a pixel-basis light of {} values, got basis '{}' with {} values", kName,
+        a.pixel_count, light.basis, light.values.size()));
+}
+
+/// out[row] = step[row] * sum code * light[column], for rows [begin, end).
+void relight_rows(const Arrays& a, std::span<const prt::Rgb> light, std::span<prt::Rgb> out,
+                  std::size_t begin, std::size_t end) {
+  for (std::size_t row = begin; row < end; ++row) {
+    prt::Rgb acc0(0.f);
+    prt::Rgb acc1(0.f);
+    std::uint32_t k = a.offsets[row];
+    const std::uint32_t stop = a.offsets[row + 1];
+    for (; k + 1 < stop; k += 2) {
+      acc0 += static_cast<float>(a.codes[k]) * light[a.columns[k]];
+      acc1 += static_cast<float>(a.codes[k + 1]) * light[a.columns[k + 1]];
+    }
+    if (k < stop) acc0 += static_cast<float>(a.codes[k]) * light[a.columns[k]];
+    out[row] = a.row_step[row] * (acc0 + acc1);
+  }
+}
+
+/// The arrays on an OpenCL device. Holds a reference to the context: it must not outlive it.
+class Quantized8Device final : public prt::DeviceRelighter {
+ public:
+  Quantized8Device(prt::ClContext& ctx, const Arrays& a)
+      : ctx_(ctx),
+        rows_(a.rows()),
+        local_count_(a.local_count),
+        vertices_(a.vertices),
+        light_host_(static_cast<std::size_t>(a.pixel_count)),
+        out_host_(a.rows() * 3) {
+    const cl::Program program = prt::build_program_source(
+        ctx, "quantized8.cl", kKernelSource, prt::KernelDefines().set("PRT_WG_SIZE", kWorkGroup));
+    kernel_ = prt::make_kernel(program, "quantized8_relight");
+    offsets_ = prt::upload(ctx, std::span<const std::uint32_t>(a.offsets), "quantized8 row offsets");
+    columns_ = prt::upload(ctx, std::span<const std::uint16_t>(a.columns), "quantized8 columns");
+    codes_ = prt::upload(ctx, std::span<const std::uint8_t>(a.codes), "quantized8 codes");
+    steps_ = prt::upload(ctx, std::span<const float>(a.row_step), "quantized8 row steps");
+    light_ = prt::make_buffer(ctx, light_host_.size() * sizeof(cl_float4), CL_MEM_READ_ONLY,
+                              "quantized8 light");
+    out_ = prt::make_buffer(ctx, out_host_.size() * sizeof(float), CL_MEM_WRITE_ONLY,
+                            "quantized8 local radiance");
+    device_bytes_ = a.offsets.size() * 4 + a.nnz() * 3 + a.rows() * 4 +
+                    light_host_.size() * sizeof(cl_float4) + out_host_.size() * sizeof(float);
+    prt::set_args(kernel_, static_cast<cl_uint>(rows_), offsets_, columns_, codes_, steps_, light_,
+                  out_);
+  }
+
+  double relight_on_device(const prt::LightCoeffs& light) override {
+    if (light.values.size() != light_host_.size())
+      throw prt::ParameterError(fmt::format("{}: light of {} values, expected {}", kName,
+                                            light.values.size(), light_host_.size()));
+    // RGB travels as float4 (prelude.cl): aligned loads the device can vectorise.
+    for (std::size_t k = 0; k < light_host_.size(); ++k) {
+      const prt::Rgb& v = light.values[k];
+      light_host_[k] = cl_float4{{v.r, v.g, v.b, 0.f}};
+    }
+    prt::write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
+                      "quantized8 light");
+    if (rows_ == 0) return 0.0;  // OpenCL forbids an empty launch
+    cl::Event done = prt::launch(ctx_, "quantized8.relight", kernel_,
+                                 prt::LaunchRange::linear(rows_, kWorkGroup));
+    done.wait();
+    const auto start = done.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const auto end = done.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    return static_cast<double>(end - start) * 1e-6;
+  }
+
+  double relight(const prt::LightCoeffs& light, prt::LocalRadiance& out) override {
+    const double ms = relight_on_device(light);
+    prt::download(ctx_, out_, std::span<float>(out_host_), "quantized8 local radiance");
+    out = prt::LocalRadiance(prt::RadianceBasis::kPixel, local_count_, vertices_);
+    for (std::size_t row = 0; row < rows_; ++row)
+      out.values[row] = prt::Rgb(out_host_[3 * row], out_host_[3 * row + 1], out_host_[3 * row + 2]);
+    return ms;
+  }
+
+  std::uint64_t device_bytes() const override { return device_bytes_; }
+
+ private:
+  prt::ClContext& ctx_;
+  std::size_t rows_;
+  int local_count_;
+  std::size_t vertices_;
+  std::vector<cl_float4> light_host_;
+  std::vector<float> out_host_;
+  cl::Kernel kernel_;
+  cl::Buffer offsets_, columns_, codes_, steps_, light_, out_;
+  std::uint64_t device_bytes_ = 0;
+};
+
+class Quantized8Transfer final : public prt::CompressedTransfer {
+ public:
+  explicit Quantized8Transfer(Arrays arrays) : a_(std::move(arrays)) {}
+
+  std::string backend() const override { return kName; }
+
+  prt::StorageReport storage() const override {
+    return {{
+        {"row_offsets", a_.offsets.size() * sizeof(std::uint32_t),
+         "u32 per row + 1: index of the row's first entry"},
+        {"columns", a_.nnz() * sizeof(std::uint16_t), "u16 cubemap pixel index per entry"},
+        {"codes", a_.nnz() * sizeof(std::uint8_t), "u8 per entry: value = code * row step"},
+        {"row_step", a_.rows() * sizeof(float), "f32 per row: the value of code 1"},
+    }};
+  }
+
+  // One multiply-add per stored entry, as the papers count T L (2 nnz). The per-row step is a
+  // multiply per row that the exact product has too (its 1/s^2) and is not counted either.
+  double flops_per_relight() const override { return 2.0 * static_cast<double>(a_.nnz()); }
+
+  double declared_error_bound() const override { return a_.error_bound; }
+
+  prt::LightCoeffs project_light(const prt::Cubemap& radiance) const override {
+    if (radiance.layout.pixel_count() != a_.pixel_count)
+      throw prt::ParameterError(fmt::format("{}: light cubemap has {} pixels, the transfer {}",
+                                            kName, radiance.layout.pixel_count(), a_.pixel_count));
+    return {"pixel", radiance.light_vector()};
+  }
+
+  void relight(const prt::LightCoeffs& light, prt::LocalRadiance& out) const override {
+    check_light(a_, light);
+    out = prt::LocalRadiance(prt::RadianceBasis::kPixel, a_.local_count, a_.vertices);
+    relight_rows(a_, light.values, out.values, 0, a_.rows());
+  }
+
+  std::unique_ptr<prt::DeviceRelighter> upload(prt::ClContext& context) const override {
+    return std::make_unique<Quantized8Device>(context, a_);
+  }
+
+  void save(prt::ArchiveWriter& w) const override {
+    w.add_meta("quantized8", {{"format_version", kFormatVersion},
+                              {"vertices", a_.vertices},
+                              {"local_count", a_.local_count},
+                              {"pixel_count", a_.pixel_count},
+                              {"bits", a_.bits},
+                              {"error_bound", a_.error_bound}});
+    w.add_section("row_offsets", a_.offsets);
+    w.add_section("columns", a_.columns);
+    w.add_section("codes", a_.codes);
+    w.add_section("row_step", a_.row_step);
+  }
+
+  static std::unique_ptr<prt::CompressedTransfer> load(const prt::ArchiveReader& r) {
+    const auto meta = r.meta_value<nlohmann::json>("quantized8");
+    const auto fail = [&](const std::string& problem) {
+      return prt::InputError(r.path(), fmt::format("{}: {}", kName, problem));
+    };
+    Arrays a;
+    try {
+      if (meta.at("format_version").get<int>() != kFormatVersion)
+        throw fail(fmt::format("format version {} is not {}", meta.at("format_version").dump(),
+                               kFormatVersion));
+      a.vertices = meta.at("vertices").get<std::size_t>();
+      a.local_count = meta.at("local_count").get<int>();
+      a.pixel_count = meta.at("pixel_count").get<int>();
+      a.bits = meta.at("bits").get<int>();
+      a.error_bound = meta.at("error_bound").get<double>();
+    } catch (const nlohmann::json::exception& e) {
+      throw fail(fmt::format("bad metadata ({})", e.what()));
+    }
+    if (a.local_count <= 0 || a.pixel_count <= 0 || a.pixel_count > 65536)
+      throw fail(fmt::format("bad shape M = {}, N = {}", a.local_count, a.pixel_count));
+    const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
+    a.offsets = r.section<std::uint32_t>("row_offsets", rows + 1);
+    a.row_step = r.section<float>("row_step", rows);
+    const std::uint64_t nnz = a.offsets.back();
+    a.columns = r.section<std::uint16_t>("columns", nnz);
+    a.codes = r.section<std::uint8_t>("codes", nnz);
+    // The kernel trusts these arrays, so a file that passed the checksum but was written wrong
+    // must still not make it read out of bounds.
+    if (a.offsets.front() != 0 || !std::is_sorted(a.offsets.begin(), a.offsets.end()))
+      throw fail("row offsets are not non-decreasing from 0");
+    if (std::any_of(a.columns.begin(), a.columns.end(),
+                    [&](std::uint16_t c) { return c >= a.pixel_count; }))
+      throw fail(fmt::format("a column index is out of range (N = {})", a.pixel_count));
+    return std::make_unique<Quantized8Transfer>(std::move(a));
+  }
+
+ private:
+  Arrays a_;
+};
+
+class Quantized8Compressor final : public prt::Compressor {
+ public:
+  explicit Quantized8Compressor(int bits) : bits_(bits) {}
+
+  std::unique_ptr<prt::CompressedTransfer> compress(const prt::TransferInput& input,
+                                                    prt::Progress& progress) const override {
+    const prt::TransferMatrix& t = input.transfer;
+    if (!t.narrow_columns())
+      throw prt::ParameterError(fmt::format(
+          "{} stores u16 column indices, but this transfer has N = {} > 65536 pixels", kName,
+          t.cols()));
+    Arrays a;
+    a.vertices = t.vertex_count();
+    a.local_count = t.local_count();
+    a.pixel_count = static_cast<int>(t.cols());
+    a.bits = bits_;
+    const int levels = (1 << bits_) - 1;
+    const auto offsets = t.row_offsets();
+    const auto counts = t.counts();
+    const auto columns = t.columns16();
+    a.offsets.reserve(t.rows() + 1);
+    a.offsets.push_back(0);
+    a.row_step.reserve(t.rows());
+    a.columns.reserve(t.nnz());
+    a.codes.reserve(t.nnz());
+    double rho = 0;
+    for (std::size_t row = 0; row < t.rows(); ++row) {
+      const auto begin = counts.begin() + offsets[row];
+      const auto end = counts.begin() + offsets[row + 1];
+      const int cmax = begin == end ? 0 : *std::max_element(begin, end);
+      const bool exact = cmax <= levels;
+      a.row_step.push_back(static_cast<float>(exact ? t.scale() : t.scale() * cmax / levels));
+      for (std::uint32_t k = offsets[row]; k < offsets[row + 1]; ++k) {
+        const int c = counts[k];
+        // Integer round-to-nearest of c * levels / cmax (halves round up).
+        const int code = exact ? c : (2 * c * levels + cmax) / (2 * cmax);
+        if (!exact) {
+          const double stored = static_cast<double>(code) * cmax / levels;
+          rho = std::max(rho, std::abs(stored - c) / c);
+        }
+        if (code == 0) continue;
+        a.columns.push_back(columns[k]);
+        a.codes.push_back(static_cast<std::uint8_t>(code));
+      }
+      a.offsets.push_back(static_cast<std::uint32_t>(a.codes.size()));
+      if ((row + 1) % 4096 == 0) progress.advance(4096);
+    }
+    progress.advance(static_cast<std::int64_t>(t.rows() % 4096));
+    a.error_bound = rho;
+    return std::make_unique<Quantized8Transfer>(std::move(a));
+  }
+
+ private:
+  int bits_;
+};
+
+prt::CompressorEntry entry() {
+  prt::CompressorEntry e;
+  e.name = kName;
+  e.description =
+      "example plugin (examples/plugin-template): CSR with a u8 code per entry and an f32 step "
+      "per row; exact with bits=8, lossy with fewer bits";
+  e.params = {{"bits", prt::ParamType::kInt, "8", 1.0, 8.0, {},
+               "quantisation levels per row: 2^bits - 1; rows whose counts fit are stored exactly, "
+               "others are rounded (entries rounding to 0 are dropped)"}};
+  e.lossless = false;  // bits < 8 may round; declared_error_bound() says how much
+  e.create = [](const prt::ParamSet& p) {
+    return std::make_unique<Quantized8Compressor>(static_cast<int>(p.get_int("bits")));
+  };
+  e.load = &Quantized8Transfer::load;
+  return e;
+}
+
+}  // namespace
+}  // namespace quantized8
+
+// The two entry points prt::load_plugin() looks up (compressor_registry.h). The version is
+// compiled in from the prtlab headers this plugin was built against; prtlab refuses the plugin
+// when it differs from its own, because the classes above would not match its ABI.
+QUANTIZED8_EXPORT int prtlab_plugin_api_version() { return prt::kPluginApiVersion; }
+
+QUANTIZED8_EXPORT void prtlab_register_plugin(prt::CompressorRegistry& registry) {
+  registry.add(quantized8::entry());
+}

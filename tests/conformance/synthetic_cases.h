@@ -1,0 +1,165 @@
+#pragma once
+// The inputs of the conformance suite: small transfers every backend must handle, each with
+// its bases and two non-negative test lights. Header-only because every tests/**/*_test.cpp
+// is its own executable built from that one file.
+//
+//   random_*           TransferMatrix::from_csr on seeded random blocks: few distinct values
+//                      (counts 1..s^2), at most one non-zero per column per vertex block, some
+//                      empty rows; shapes vary M, N, s, the density and the column width
+//                      (random_wide: N = 98,304 > 65,536 columns, stored as u32)
+//   sphere_over_plane  a real transfer: make_sphere over make_plane through compute_transfer
+//                      (R = 8, S = 4, s = 2), with shadows and fractional counts
+//   all_zero           vertices whose blocks hold no non-zero at all (nnz = 0)
+//
+// Each case's description names its seed, so a failure message says how to reproduce it.
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "prtlab/compressor.h"
+#include "prtlab/cubemap.h"
+#include "prtlab/hemisphere_grid.h"
+#include "prtlab/procedural_shapes.h"
+#include "prtlab/transfer_matrix.h"
+
+namespace prt::conformance {
+
+struct CaseData {
+  std::string name;
+  std::string description;  ///< shape and seed
+  TransferMatrix transfer;
+  CubemapLayout cubemap;
+  HemisphereGrid grid;
+  std::vector<Cubemap> lights;  ///< non-negative radiance at resolution R
+
+  TransferInput input() const { return TransferInput{transfer, nullptr, cubemap, grid}; }
+};
+
+/// A random pixel-basis transfer: every (vertex, column) pair is occupied with probability
+/// `density` by one entry in a random local row with a random count in 1..s^2. Vertices listed
+/// in `empty_vertices` get no entry.
+inline TransferMatrix random_transfer(std::uint64_t seed, std::size_t vertices, int grid_side, int resolution,
+                                      int supersampling, double density,
+                                      const std::vector<std::size_t>& empty_vertices = {}) {
+  std::mt19937_64 rng(seed);
+  const int m = grid_side * grid_side, n = 6 * resolution * resolution, max_count = supersampling * supersampling;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_int_distribution<int> row_of(0, m - 1), count_of(1, max_count);
+  std::vector<std::uint32_t> offsets{0}, columns;
+  std::vector<std::uint8_t> counts;
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(static_cast<std::size_t>(m));
+  for (std::size_t v = 0; v < vertices; ++v) {
+    for (auto& r : rows) r.clear();
+    const bool empty = std::find(empty_vertices.begin(), empty_vertices.end(), v) != empty_vertices.end();
+    for (int k = 0; k < n && !empty; ++k) {
+      if (u(rng) >= density) continue;
+      const int row = row_of(rng);
+      rows[static_cast<std::size_t>(row)].push_back(
+          {static_cast<std::uint32_t>(k), static_cast<std::uint8_t>(count_of(rng))});
+    }
+    for (const auto& r : rows) {  // columns arrive in increasing order per row
+      for (const auto& [c, x] : r) {
+        columns.push_back(c);
+        counts.push_back(x);
+      }
+      offsets.push_back(static_cast<std::uint32_t>(columns.size()));
+    }
+  }
+  return TransferMatrix::from_csr(vertices, m, n, supersampling, std::move(offsets), columns, std::move(counts));
+}
+
+/// Two lights: uniform random radiance in [0, 1) per channel, and a high-dynamic-range one
+/// (dim sky plus three bright pixels, up to 500).
+inline std::vector<Cubemap> test_lights(int resolution, std::uint64_t seed) {
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  Cubemap random(resolution), hdr(resolution);
+  for (auto& r : random.radiance) r = Rgb(u(rng), u(rng), u(rng));
+  for (auto& r : hdr.radiance) r = Rgb(0.05f + 0.01f * u(rng), 0.06f, 0.08f);
+  std::uniform_int_distribution<std::size_t> pixel(0, hdr.radiance.size() - 1);
+  for (float peak : {500.0f, 120.0f, 35.0f}) hdr.radiance[pixel(rng)] = Rgb(peak, 0.9f * peak, 0.7f * peak);
+  return {std::move(random), std::move(hdr)};
+}
+
+inline TransferMatrix sphere_over_plane_transfer() {
+  Mesh mesh = make_plane(3.0, 3.0, 4);
+  Mesh sphere = make_sphere(0.5, 12, 6);
+  for (auto& p : sphere.positions) p += Vec3(0.2f, 0.8f, -0.1f);
+  mesh.append(sphere, 1);
+  TransferParams params;
+  params.cubemap_resolution = 8;
+  params.local_grid = 4;
+  params.supersampling = 2;
+  params.show_progress = false;
+  return compute_transfer(mesh, params).transfer;
+}
+
+struct CaseSpec {
+  std::string name;
+  std::function<std::unique_ptr<CaseData>()> make;
+};
+
+inline std::unique_ptr<CaseData> make_case(std::string name, std::string description, TransferMatrix t, int resolution,
+                                           int grid_side, std::uint64_t light_seed) {
+  auto c = std::unique_ptr<CaseData>(new CaseData{std::move(name), std::move(description), std::move(t),
+                                                  CubemapLayout(resolution), HemisphereGrid(grid_side), {}});
+  c->lights = test_lights(resolution, light_seed);
+  return c;
+}
+
+/// A random case: seed, vertices, S (M = S^2), R (N = 6 R^2), s, density, empty vertices.
+inline CaseSpec random_case(std::string name, std::uint64_t seed, std::size_t vertices, int grid_side, int resolution,
+                            int supersampling, double density, std::vector<std::size_t> empty = {}) {
+  return {name, [=] {
+            const std::string description =
+                fmt::format("{}: random_transfer(seed = {}, vertices = {}, S = {}, R = {}, s = {}, density = {})", name,
+                            seed, vertices, grid_side, resolution, supersampling, density);
+            return make_case(name, description,
+                             random_transfer(seed, vertices, grid_side, resolution, supersampling, density, empty),
+                             resolution, grid_side, seed);
+          }};
+}
+
+/// Every case, in a fixed order (test names are derived from it).
+inline const std::vector<CaseSpec>& case_specs() {
+  static const std::vector<CaseSpec> specs = {
+      random_case("random_small", 11, 6, 2, 2, 2, 0.6),
+      random_case("random_unit_counts", 23, 9, 3, 2, 1, 0.35),
+      random_case("random_dense_s3", 37, 4, 4, 4, 3, 0.95, {2}),
+      random_case("random_long_rows", 41, 3, 1, 4, 2, 0.8),
+      random_case("random_wide", 53, 3, 2, 128, 2, 0.003),
+      {"sphere_over_plane",
+       [] {
+         return make_case("sphere_over_plane",
+                          "sphere_over_plane: make_sphere(0.5, 12, 6) at (0.2, 0.8, -0.1) over make_plane(3, 3, 4), "
+                          "R = 8, S = 4, s = 2, light seed 61",
+                          sphere_over_plane_transfer(), 8, 4, 61);
+       }},
+      {"all_zero",
+       [] {
+         return make_case("all_zero", "all_zero: 5 vertices, S = 2, R = 2, s = 2, nnz = 0, light seed 71",
+                          random_transfer(71, 5, 2, 2, 2, 0.0), 2, 2, 71);
+       }},
+  };
+  return specs;
+}
+
+/// The case of that name, built once per process.
+inline const CaseData& case_data(const std::string& name) {
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<CaseData>> built;
+  const std::lock_guard lock(mutex);
+  auto it = built.find(name);
+  if (it != built.end()) return *it->second;
+  for (const auto& spec : case_specs())
+    if (spec.name == name) return *(built[name] = spec.make());
+  throw std::out_of_range("no conformance case named " + name);
+}
+
+}  // namespace prt::conformance
