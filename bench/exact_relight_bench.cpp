@@ -48,7 +48,8 @@ prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
   for (std::size_t v = 0; v < vertices; ++v) {
     for (auto& r : rows) r.clear();
     for (int k = 0; k < n; ++k)
-      if (u(rng) < 3200.0 / n) rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), count_of(rng)});
+      if (u(rng) < 3200.0 / n)
+        rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), count_of(rng)});
     for (const auto& r : rows) {
       for (const auto& [c, x] : r) {
         cols.push_back(c);
@@ -57,7 +58,8 @@ prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
       offsets.push_back(static_cast<std::uint32_t>(cols.size()));
     }
   }
-  return prt::TransferMatrix::from_csr(vertices, m, n, 2, std::move(offsets), cols, std::move(counts));
+  return prt::TransferMatrix::from_csr(vertices, m, n, 2, std::move(offsets), cols,
+                                       std::move(counts));
 }
 
 BenchData make_data() {
@@ -75,7 +77,8 @@ BenchData make_data() {
     d.stats = result.stats;
     d.source = fmt::format("bunny ({} vertices)", d.mesh.vertex_count());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bunny unavailable (%s); using a synthetic matrix of its shape\n", e.what());
+    std::fprintf(stderr, "bunny unavailable (%s); using a synthetic matrix of its shape\n",
+                 e.what());
     d.transfer = synthetic_bunny_shape(rng);
     d.source = "synthetic 210304 x 6144, ~50 nnz/row";
   }
@@ -104,10 +107,12 @@ const BenchData& data() {
 
 void add_counters(benchmark::State& state, const BenchData& d, double seconds) {
   const prt::TransferMatrix& t = d.transfer;
-  const double bytes = static_cast<double>(t.memory_bytes() + t.cols() * sizeof(Rgb) + t.rows() * sizeof(Rgb));
-  state.counters["nnz/s"] = benchmark::Counter(static_cast<double>(t.nnz()), benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["bytes/s"] =
-      benchmark::Counter(bytes, benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::OneK::kIs1000);
+  const double bytes =
+      static_cast<double>(t.memory_bytes() + t.cols() * sizeof(Rgb) + t.rows() * sizeof(Rgb));
+  state.counters["nnz/s"] = benchmark::Counter(static_cast<double>(t.nnz()),
+                                               benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["bytes/s"] = benchmark::Counter(
+      bytes, benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::OneK::kIs1000);
   const double per = seconds / static_cast<double>(state.iterations());
   state.counters["ms"] = per * 1e3;
   state.counters["vs_eigen"] = d.eigen_seconds / per;
@@ -159,7 +164,8 @@ void BM_RelightEigen(benchmark::State& state) {
 
 void BM_RelightDoubleReference(benchmark::State& state) {
   const BenchData& d = data();
-  run_timed(state, [&] { benchmark::DoNotOptimize(prt::relight_exact_double(d.transfer, d.light)); });
+  run_timed(state,
+            [&] { benchmark::DoNotOptimize(prt::relight_exact_double(d.transfer, d.light)); });
 }
 
 // The precomputation of T for the bunny (skipped for the synthetic fallback).

@@ -1,8 +1,11 @@
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <vector>
 
 #include "commands.h"
 #include "prtlab/build_info.h"
+#include "prtlab/compressor_registry.h"
 #include "prtlab/error.h"
 #include "prtlab/log.h"
 #include "prtlab/progress.h"
@@ -22,12 +25,23 @@ int main(int argc, char** argv) {
                  "(default: $PRTLAB_DEVICE, else the first GPU, else PoCL's CPU device)");
   app.add_flag("--strict-device", g.strict_device, "Fail instead of falling back when the device is not found");
   app.add_flag("--no-opencl", g.no_opencl, "Run the C++ reference paths only");
+  std::vector<std::string> plugins;
+  app.add_option("--plugin", plugins,
+                 "Load compressor backends from a plugin library (repeatable; see "
+                 "docs/adding-a-compressor.md)")
+      ->type_name("PATH.so")
+      ->allow_extra_args(false);
+  // Global options are accepted after the subcommand too (`prtlab list --plugin q8.so`).
+  app.fallthrough();
+  // Runs after parsing and before any subcommand's callback, so every command sees the plugins'
+  // backends; a plugin that fails to load stops the command with load_plugin()'s reason.
   app.parse_complete_callback([&] {
     if (g.quiet) {
       Progress::set_quiet(true);
       set_log_level(LogLevel::kWarn);
     }
     if (g.verbose) set_log_level(LogLevel::kDebug);
+    for (const auto& path : plugins) load_plugin(path);
   });
 
   cli::add_scene_commands(app);

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <fstream>
 
 #include "prtlab/error.h"
@@ -16,8 +17,10 @@ void write_file_atomically(const std::filesystem::path& path,
     fs::create_directories(path.parent_path(), ec);
     if (ec) throw InputError(path, fmt::format("cannot create directory: {}", ec.message()));
   }
+  // pid + a process-wide counter: two threads writing the same path never share a temporary.
+  static std::atomic<std::uint64_t> counter{0};
   fs::path tmp = path;
-  tmp += fmt::format(".tmp.{}", ::getpid());
+  tmp += fmt::format(".tmp.{}.{}", ::getpid(), counter.fetch_add(1));
   try {
     write(tmp);
     std::error_code ec;

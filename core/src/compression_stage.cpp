@@ -1,6 +1,7 @@
 #include "prtlab/compression_stage.h"
 
 #include <chrono>
+#include <filesystem>
 
 #include "prtlab/archive.h"
 #include "prtlab/compressor_registry.h"
@@ -19,7 +20,9 @@ CompressionResult compress_cached(const std::string& backend, const std::map<std
   CompressionResult out;
   out.params = validated.canonical();
   Hasher h;
-  h.add("compressed-transfer").add(backend).add(transfer_key);
+  h.add("compressed-transfer").add(backend).add(entry.version).add(entry.origin).add(transfer_key);
+  // A plugin rebuilt in place must not reuse results of its previous build.
+  if (entry.origin != "built-in" && std::filesystem::exists(entry.origin)) h.add_file(entry.origin);
   for (const auto& [k, v] : out.params) h.add(k).add(v);
   out.key = h.digest();
 

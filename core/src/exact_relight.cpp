@@ -14,7 +14,8 @@ typedef float Float4 __attribute__((vector_size(16)));
 
 std::vector<Float4> padded_light(std::span<const Rgb> light) {
   std::vector<Float4> out(light.size());
-  for (std::size_t k = 0; k < light.size(); ++k) out[k] = Float4{light[k].x, light[k].y, light[k].z, 0.f};
+  for (std::size_t k = 0; k < light.size(); ++k)
+    out[k] = Float4{light[k].x, light[k].y, light[k].z, 0.f};
   return out;
 }
 
@@ -40,27 +41,29 @@ void product_rows(std::size_t begin, std::size_t end, const std::uint32_t* offse
 
 void check_shapes(const TransferMatrix& t, std::size_t light, std::size_t out) {
   if (light != t.cols()) {
-    throw ParameterError(fmt::format("relight: the light has {} values, the transfer has N = {} columns", light,
-                                     t.cols()));
+    throw ParameterError(fmt::format(
+        "relight: the light has {} values, the transfer has N = {} columns", light, t.cols()));
   }
   if (out != t.rows()) {
-    throw ParameterError(fmt::format("relight: the output has {} values, the transfer has {} rows", out, t.rows()));
+    throw ParameterError(
+        fmt::format("relight: the output has {} values, the transfer has {} rows", out, t.rows()));
   }
 }
 
 }  // namespace
 
-void relight_exact(const TransferMatrix& t, std::span<const Rgb> light, std::span<Rgb> out, RelightThreads threads) {
+void relight_exact(const TransferMatrix& t, std::span<const Rgb> light, std::span<Rgb> out,
+                   RelightThreads threads) {
   check_shapes(t, light.size(), out.size());
   const std::vector<Float4> l4 = padded_light(light);
   const float scale = static_cast<float>(t.scale());
   auto run = [&](std::size_t b, std::size_t e) {
     if (t.narrow_columns()) {
-      product_rows(b, e, t.row_offsets().data(), t.columns16().data(), t.counts().data(), l4.data(), scale,
-                   out.data());
+      product_rows(b, e, t.row_offsets().data(), t.columns16().data(), t.counts().data(), l4.data(),
+                   scale, out.data());
     } else {
-      product_rows(b, e, t.row_offsets().data(), t.columns32().data(), t.counts().data(), l4.data(), scale,
-                   out.data());
+      product_rows(b, e, t.row_offsets().data(), t.columns32().data(), t.counts().data(), l4.data(),
+                   scale, out.data());
     }
   };
   if (threads == RelightThreads::kOne) {
@@ -85,13 +88,15 @@ std::vector<Vec3d> relight_exact_double(const TransferMatrix& t, std::span<const
   const auto offsets = t.row_offsets();
   const auto counts = t.counts();
   const double scale = t.scale();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.rows(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t row = r.begin(); row != r.end(); ++row) {
-      Vec3d acc{0.0};
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) acc += static_cast<double>(counts[i]) * Vec3d(light[t.column(i)]);
-      out[row] = acc * scale;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.rows(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t row = r.begin(); row != r.end(); ++row) {
+                        Vec3d acc{0.0};
+                        for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i)
+                          acc += static_cast<double>(counts[i]) * Vec3d(light[t.column(i)]);
+                        out[row] = acc * scale;
+                      }
+                    });
   return out;
 }
 
@@ -102,7 +107,8 @@ EigenSparseTransfer::EigenSparseTransfer(const TransferMatrix& t)
   // Fill the compressed arrays directly: rows are already sorted, so no triplet sort.
   matrix_.resizeNonZeros(static_cast<Eigen::Index>(t.nnz()));
   const auto offsets = t.row_offsets();
-  for (std::size_t r = 0; r <= t.rows(); ++r) matrix_.outerIndexPtr()[r] = static_cast<int>(offsets[r]);
+  for (std::size_t r = 0; r <= t.rows(); ++r)
+    matrix_.outerIndexPtr()[r] = static_cast<int>(offsets[r]);
   const float scale = static_cast<float>(t.scale());
   for (std::size_t i = 0; i < t.nnz(); ++i) {
     matrix_.innerIndexPtr()[i] = static_cast<int>(t.column(i));
@@ -121,9 +127,11 @@ EigenSparseTransfer::Dense EigenSparseTransfer::to_dense(std::span<const Rgb> li
 }
 
 void EigenSparseTransfer::relight(std::span<const Rgb> light, std::span<Rgb> out) const {
-  if (light.size() != static_cast<std::size_t>(matrix_.cols()) || out.size() != static_cast<std::size_t>(matrix_.rows())) {
-    throw ParameterError(fmt::format("Eigen relight: light {} / output {} values for a {} x {} transfer", light.size(),
-                                     out.size(), matrix_.rows(), matrix_.cols()));
+  if (light.size() != static_cast<std::size_t>(matrix_.cols()) ||
+      out.size() != static_cast<std::size_t>(matrix_.rows())) {
+    throw ParameterError(
+        fmt::format("Eigen relight: light {} / output {} values for a {} x {} transfer",
+                    light.size(), out.size(), matrix_.rows(), matrix_.cols()));
   }
   Dense result;
   multiply(to_dense(light), result);

@@ -18,7 +18,9 @@ namespace {
 
 // Solid angle of [0, x] x [0, y] on the plane at unit distance (gnomonic projection);
 // inclusion-exclusion over a rectangle's corners gives its exact solid angle.
-double corner_area(double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0)); }
+double corner_area(double x, double y) {
+  return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0));
+}
 
 double rect_solid_angle(double s0, double s1, double t0, double t1) {
   return corner_area(s1, t1) - corner_area(s0, t1) - corner_area(s1, t0) + corner_area(s0, t0);
@@ -29,18 +31,20 @@ double rect_solid_angle(double s0, double s1, double t0, double t1) {
 SupersampledCubemap::SupersampledCubemap(int resolution, int supersampling)
     : r_(resolution), s_(supersampling) {
   if (resolution < 1 || resolution > 4096) {
-    throw ParameterError(fmt::format("cubemap resolution must be in [1, 4096], got {}", resolution));
+    throw ParameterError(
+        fmt::format("cubemap resolution must be in [1, 4096], got {}", resolution));
   }
   // Counts are stored as uint8, so s^2 <= 255.
   if (supersampling < 1 || supersampling > 15) {
-    throw ParameterError(fmt::format("supersampling must be in [1, 15] (s^2 counts fit in a byte), got {}",
-                                     supersampling));
+    throw ParameterError(fmt::format(
+        "supersampling must be in [1, 15] (s^2 counts fit in a byte), got {}", supersampling));
   }
   const int sr = r_ * s_;
   const std::size_t n = static_cast<std::size_t>(6) * sr * sr;
   // Sub-ray ids are 32-bit (visibility()'s unblocked list).
   if (n > 0xffffffffull) {
-    throw ParameterError(fmt::format("{} sub-rays per point (R = {}, s = {}) exceed 2^32", n, r_, s_));
+    throw ParameterError(
+        fmt::format("{} sub-rays per point (R = {}, s = {}) exceed 2^32", n, r_, s_));
   }
   dir_x_.resize(n);
   dir_y_.resize(n);
@@ -67,8 +71,8 @@ SupersampledCubemap::SupersampledCubemap(int resolution, int supersampling)
   }
 }
 
-void SupersampledCubemap::subpixel_bounds(std::size_t r, int& face, double& s0, double& s1, double& t0,
-                                          double& t1) const {
+void SupersampledCubemap::subpixel_bounds(std::size_t r, int& face, double& s0, double& s1,
+                                          double& t0, double& t1) const {
   const std::size_t ss = static_cast<std::size_t>(s_) * s_;
   const std::size_t k = r / ss, sub = r % ss;
   face = static_cast<int>(k / (static_cast<std::size_t>(r_) * r_));
@@ -94,7 +98,8 @@ struct DeviceError {
 void on_embree_error(void* user, RTCError code, const char* message) {
   auto* err = static_cast<DeviceError*>(user);
   std::lock_guard lock(err->mutex);
-  if (err->first.empty()) err->first = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
+  if (err->first.empty())
+    err->first = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
 }
 
 }  // namespace
@@ -116,7 +121,8 @@ struct EmbreeScene::Impl {
   }
 };
 
-EmbreeScene::EmbreeScene(const Mesh& mesh, double offset_relative) : impl_(std::make_unique<Impl>()) {
+EmbreeScene::EmbreeScene(const Mesh& mesh, double offset_relative)
+    : impl_(std::make_unique<Impl>()) {
   if (mesh.triangle_count() == 0) throw ParameterError("EmbreeScene: the mesh has no triangles");
   if (!(offset_relative >= 0.0)) throw ParameterError("EmbreeScene: the ray offset must be >= 0");
   const Aabb box = mesh.bounds();
@@ -125,15 +131,17 @@ EmbreeScene::EmbreeScene(const Mesh& mesh, double offset_relative) : impl_(std::
 
   impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) {
-    throw Error(fmt::format("Embree: rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
+    throw Error(fmt::format("Embree: rtcNewDevice failed (error {})",
+                            static_cast<int>(rtcGetDeviceError(nullptr))));
   }
   rtcSetDeviceErrorFunction(impl_->device, on_embree_error, &impl_->error);
 
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), mesh.vertex_count()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                            3 * sizeof(unsigned), mesh.triangle_count()));
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
+                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                            mesh.triangle_count()));
   if (!vb || !ib) {
     rtcReleaseGeometry(geom);
     impl_->check("Embree geometry buffer allocation");
@@ -159,8 +167,12 @@ EmbreeScene::~EmbreeScene() = default;
 EmbreeScene::EmbreeScene(EmbreeScene&&) noexcept = default;
 EmbreeScene& EmbreeScene::operator=(EmbreeScene&&) noexcept = default;
 
-double EmbreeScene::bounds_diagonal() const { return impl_->diagonal; }
-double EmbreeScene::ray_offset() const { return impl_->offset; }
+double EmbreeScene::bounds_diagonal() const {
+  return impl_->diagonal;
+}
+double EmbreeScene::ray_offset() const {
+  return impl_->offset;
+}
 
 bool EmbreeScene::occluded(const Vec3d& origin, const Vec3d& dir, double tnear, double tfar) const {
   RTCIntersectContext context;
@@ -173,7 +185,8 @@ bool EmbreeScene::occluded(const Vec3d& origin, const Vec3d& dir, double tnear, 
   ray.dir_y = static_cast<float>(dir.y);
   ray.dir_z = static_cast<float>(dir.z);
   ray.tnear = static_cast<float>(tnear);
-  ray.tfar = static_cast<float>(std::min(tfar, static_cast<double>(std::numeric_limits<float>::infinity())));
+  ray.tfar = static_cast<float>(
+      std::min(tfar, static_cast<double>(std::numeric_limits<float>::infinity())));
   ray.mask = ~0u;
   ray.flags = 0;
   ray.time = 0.f;
@@ -188,23 +201,26 @@ namespace {
 // emulated as two 8-wide halves there. bench numbers in docs/transfer.md.
 constexpr int kPacket = 8;
 using RayPacket = RTCRay8;
-inline void occluded_packet(const int* valid, RTCScene scene, RTCIntersectContext* ctx, RayPacket* ray) {
+inline void occluded_packet(const int* valid, RTCScene scene, RTCIntersectContext* ctx,
+                            RayPacket* ray) {
   rtcOccluded8(valid, scene, ctx, ray);
 }
 
 }  // namespace
 
-std::uint64_t EmbreeScene::visibility(const SupersampledCubemap& dirs, const Vec3d& position, const Vec3d& normal,
-                                      std::span<std::uint8_t> counts,
+std::uint64_t EmbreeScene::visibility(const SupersampledCubemap& dirs, const Vec3d& position,
+                                      const Vec3d& normal, std::span<std::uint8_t> counts,
                                       std::vector<std::uint32_t>* unblocked) const {
-  PRT_CHECK(counts.size() == static_cast<std::size_t>(dirs.pixel_count()), "visibility: counts has {} entries, N = {}",
-            counts.size(), dirs.pixel_count());
+  PRT_CHECK(counts.size() == static_cast<std::size_t>(dirs.pixel_count()),
+            "visibility: counts has {} entries, N = {}", counts.size(), dirs.pixel_count());
   std::fill(counts.begin(), counts.end(), std::uint8_t{0});
   if (unblocked) unblocked->clear();
 
   const Vec3d o = position + impl_->offset * normal;
-  const float ox = static_cast<float>(o.x), oy = static_cast<float>(o.y), oz = static_cast<float>(o.z);
-  const float nx = static_cast<float>(normal.x), ny = static_cast<float>(normal.y), nz = static_cast<float>(normal.z);
+  const float ox = static_cast<float>(o.x), oy = static_cast<float>(o.y),
+              oz = static_cast<float>(o.z);
+  const float nx = static_cast<float>(normal.x), ny = static_cast<float>(normal.y),
+              nz = static_cast<float>(normal.z);
   const float* dx = dirs.dir_x().data();
   const float* dy = dirs.dir_y().data();
   const float* dz = dirs.dir_z().data();
@@ -234,7 +250,8 @@ std::uint64_t EmbreeScene::visibility(const SupersampledCubemap& dirs, const Vec
     // below it (the face is the convex hull of its corners on the sphere): skip it.
     bool any_above = false;
     for (double cs : {-1.0, 1.0})
-      for (double ct : {-1.0, 1.0}) any_above |= glm::dot(CubemapLayout::face_direction(face, cs, ct), normal) > 0.0;
+      for (double ct : {-1.0, 1.0})
+        any_above |= glm::dot(CubemapLayout::face_direction(face, cs, ct), normal) > 0.0;
     if (!any_above) continue;
 
     const std::size_t face_end = (face + 1) * per_face;

@@ -5,8 +5,8 @@
 // source embedded below), save/load, and the two extern "C" entry points prtlab looks for.
 //
 // Method. The exact transfer T stores every entry as a visibility count c in 1..s^2 with the
-// common scale 1/s^2 (transfer_matrix.h). quantized8 keeps T's sparsity (CSR, u16 column
-// indices) and stores each entry as a u8 code times a per-row step:
+// common scale 1/s^2 (transfer_matrix.h). quantized8 keeps T's sparsity (CSR; u16 column
+// indices, or u32 when N > 65536) and stores each entry as a u8 code times a per-row step:
 //
 //   Q = 2^bits - 1 levels, cmax = the row's largest count
 //   cmax <= Q:  code = c, step = 1/s^2                          (exact)
@@ -27,6 +27,8 @@
 #include <prtlab/compressor_registry.h>
 #include <prtlab/error.h>
 #include <prtlab/transfer_matrix.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -53,10 +55,10 @@ constexpr std::size_t kWorkGroup = 64;
 // source and builds it with prt::build_program_source(), which prepends prtlab's prelude
 // (PRT_GUARD, prt_store_rgb3, PRT_WG_SIZE) and caches the program like any built-in kernel.
 // One work-item per row; two independent accumulators, in the same order as relight_rows() so
-// that both paths agree to float rounding.
+// that both paths agree to float rounding. Q8_COLUMN (ushort or uint) is set by the host.
 constexpr std::string_view kKernelSource = R"CLC(
 __kernel void quantized8_relight(const uint rows, __global const uint* offsets,
-                                 __global const ushort* columns, __global const uchar* codes,
+                                 __global const Q8_COLUMN* columns, __global const uchar* codes,
                                  __global const float* row_step, __global const float4* light,
                                  __global float* out) {
   const uint row = get_global_id(0);
@@ -80,36 +82,40 @@ struct Arrays {
   int local_count = 0;  // M
   int pixel_count = 0;  // N
   int bits = 8;
-  double error_bound = 0;              // rho of the header comment
-  std::vector<std::uint32_t> offsets;  // rows + 1
-  std::vector<std::uint16_t> columns;  // nnz
-  std::vector<std::uint8_t> codes;     // nnz
-  std::vector<float> row_step;         // rows
+  double error_bound = 0;                // rho of the header comment
+  std::vector<std::uint32_t> offsets;    // rows + 1
+  std::vector<std::uint16_t> columns16;  // nnz, when N <= 65536
+  std::vector<std::uint32_t> columns32;  // nnz, when N > 65536
+  std::vector<std::uint8_t> codes;       // nnz
+  std::vector<float> row_step;           // rows
 
   std::size_t rows() const { return row_step.size(); }
   std::size_t nnz() const { return codes.size(); }
+  bool wide() const { return pixel_count > 65536; }
+  std::size_t column_bytes() const { return wide() ? 4 : 2; }
 };
 
-void check_light(const Arrays& a, const prt::LightCoeffs& light) {
-  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(a.pixel_count))
-    throw prt::ParameterError(fmt::format(
-        "{}: expected a pixel-basis light of {} values, got basis '{}' with {} values", kName,
-        a.pixel_count, light.basis, light.values.size()));
+void check_light(const prt::LightCoeffs& light, int pixel_count) {
+  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(pixel_count))
+    throw prt::ParameterError(
+        fmt::format("{}: expected a pixel-basis light of {} values, got basis '{}' with {} values",
+                    kName, pixel_count, light.basis, light.values.size()));
 }
 
 /// out[row] = step[row] * sum code * light[column], for rows [begin, end).
-void relight_rows(const Arrays& a, std::span<const prt::Rgb> light, std::span<prt::Rgb> out,
-                  std::size_t begin, std::size_t end) {
+template <typename Column>
+void relight_rows(const Arrays& a, std::span<const Column> columns, std::span<const prt::Rgb> light,
+                  std::span<prt::Rgb> out, std::size_t begin, std::size_t end) {
   for (std::size_t row = begin; row < end; ++row) {
     prt::Rgb acc0(0.f);
     prt::Rgb acc1(0.f);
     std::uint32_t k = a.offsets[row];
     const std::uint32_t stop = a.offsets[row + 1];
     for (; k + 1 < stop; k += 2) {
-      acc0 += static_cast<float>(a.codes[k]) * light[a.columns[k]];
-      acc1 += static_cast<float>(a.codes[k + 1]) * light[a.columns[k + 1]];
+      acc0 += static_cast<float>(a.codes[k]) * light[columns[k]];
+      acc1 += static_cast<float>(a.codes[k + 1]) * light[columns[k + 1]];
     }
-    if (k < stop) acc0 += static_cast<float>(a.codes[k]) * light[a.columns[k]];
+    if (k < stop) acc0 += static_cast<float>(a.codes[k]) * light[columns[k]];
     out[row] = a.row_step[row] * (acc0 + acc1);
   }
 }
@@ -119,32 +125,38 @@ class Quantized8Device final : public prt::DeviceRelighter {
  public:
   Quantized8Device(prt::ClContext& ctx, const Arrays& a)
       : ctx_(ctx),
+        pixel_count_(a.pixel_count),
         rows_(a.rows()),
         local_count_(a.local_count),
         vertices_(a.vertices),
         light_host_(static_cast<std::size_t>(a.pixel_count)),
         out_host_(a.rows() * 3) {
-    const cl::Program program = prt::build_program_source(
-        ctx, "quantized8.cl", kKernelSource, prt::KernelDefines().set("PRT_WG_SIZE", kWorkGroup));
+    const auto defines = prt::KernelDefines()
+                             .set("PRT_WG_SIZE", kWorkGroup)
+                             .set("Q8_COLUMN", a.wide() ? "uint" : "ushort");
+    const cl::Program program =
+        prt::build_program_source(ctx, "quantized8.cl", kKernelSource, defines);
     kernel_ = prt::make_kernel(program, "quantized8_relight");
-    offsets_ = prt::upload(ctx, std::span<const std::uint32_t>(a.offsets), "quantized8 row offsets");
-    columns_ = prt::upload(ctx, std::span<const std::uint16_t>(a.columns), "quantized8 columns");
+    offsets_ =
+        prt::upload(ctx, std::span<const std::uint32_t>(a.offsets), "quantized8 row offsets");
+    columns_ =
+        a.wide()
+            ? prt::upload(ctx, std::span<const std::uint32_t>(a.columns32), "quantized8 columns")
+            : prt::upload(ctx, std::span<const std::uint16_t>(a.columns16), "quantized8 columns");
     codes_ = prt::upload(ctx, std::span<const std::uint8_t>(a.codes), "quantized8 codes");
     steps_ = prt::upload(ctx, std::span<const float>(a.row_step), "quantized8 row steps");
     light_ = prt::make_buffer(ctx, light_host_.size() * sizeof(cl_float4), CL_MEM_READ_ONLY,
                               "quantized8 light");
     out_ = prt::make_buffer(ctx, out_host_.size() * sizeof(float), CL_MEM_WRITE_ONLY,
                             "quantized8 local radiance");
-    device_bytes_ = a.offsets.size() * 4 + a.nnz() * 3 + a.rows() * 4 +
+    device_bytes_ = a.offsets.size() * 4 + a.nnz() * (a.column_bytes() + 1) + a.rows() * 4 +
                     light_host_.size() * sizeof(cl_float4) + out_host_.size() * sizeof(float);
     prt::set_args(kernel_, static_cast<cl_uint>(rows_), offsets_, columns_, codes_, steps_, light_,
                   out_);
   }
 
   double relight_on_device(const prt::LightCoeffs& light) override {
-    if (light.values.size() != light_host_.size())
-      throw prt::ParameterError(fmt::format("{}: light of {} values, expected {}", kName,
-                                            light.values.size(), light_host_.size()));
+    check_light(light, pixel_count_);
     // RGB travels as float4 (prelude.cl): aligned loads the device can vectorise.
     for (std::size_t k = 0; k < light_host_.size(); ++k) {
       const prt::Rgb& v = light.values[k];
@@ -166,7 +178,8 @@ class Quantized8Device final : public prt::DeviceRelighter {
     prt::download(ctx_, out_, std::span<float>(out_host_), "quantized8 local radiance");
     out = prt::LocalRadiance(prt::RadianceBasis::kPixel, local_count_, vertices_);
     for (std::size_t row = 0; row < rows_; ++row)
-      out.values[row] = prt::Rgb(out_host_[3 * row], out_host_[3 * row + 1], out_host_[3 * row + 2]);
+      out.values[row] =
+          prt::Rgb(out_host_[3 * row], out_host_[3 * row + 1], out_host_[3 * row + 2]);
     return ms;
   }
 
@@ -174,6 +187,7 @@ class Quantized8Device final : public prt::DeviceRelighter {
 
  private:
   prt::ClContext& ctx_;
+  int pixel_count_;
   std::size_t rows_;
   int local_count_;
   std::size_t vertices_;
@@ -194,7 +208,8 @@ class Quantized8Transfer final : public prt::CompressedTransfer {
     return {{
         {"row_offsets", a_.offsets.size() * sizeof(std::uint32_t),
          "u32 per row + 1: index of the row's first entry"},
-        {"columns", a_.nnz() * sizeof(std::uint16_t), "u16 cubemap pixel index per entry"},
+        {"columns", a_.nnz() * a_.column_bytes(),
+         a_.wide() ? "u32 cubemap pixel index per entry" : "u16 cubemap pixel index per entry"},
         {"codes", a_.nnz() * sizeof(std::uint8_t), "u8 per entry: value = code * row step"},
         {"row_step", a_.rows() * sizeof(float), "f32 per row: the value of code 1"},
     }};
@@ -214,9 +229,15 @@ class Quantized8Transfer final : public prt::CompressedTransfer {
   }
 
   void relight(const prt::LightCoeffs& light, prt::LocalRadiance& out) const override {
-    check_light(a_, light);
+    check_light(light, a_.pixel_count);
     out = prt::LocalRadiance(prt::RadianceBasis::kPixel, a_.local_count, a_.vertices);
-    relight_rows(a_, light.values, out.values, 0, a_.rows());
+    // Rows are independent: TBB splits them over the cores (prtlab's own loops use TBB too).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a_.rows(), 1024), [&](const auto& r) {
+      if (a_.wide())
+        relight_rows<std::uint32_t>(a_, a_.columns32, light.values, out.values, r.begin(), r.end());
+      else
+        relight_rows<std::uint16_t>(a_, a_.columns16, light.values, out.values, r.begin(), r.end());
+    });
   }
 
   std::unique_ptr<prt::DeviceRelighter> upload(prt::ClContext& context) const override {
@@ -231,7 +252,10 @@ class Quantized8Transfer final : public prt::CompressedTransfer {
                               {"bits", a_.bits},
                               {"error_bound", a_.error_bound}});
     w.add_section("row_offsets", a_.offsets);
-    w.add_section("columns", a_.columns);
+    if (a_.wide())
+      w.add_section("columns", a_.columns32);
+    else
+      w.add_section("columns", a_.columns16);
     w.add_section("codes", a_.codes);
     w.add_section("row_step", a_.row_step);
   }
@@ -254,20 +278,25 @@ class Quantized8Transfer final : public prt::CompressedTransfer {
     } catch (const nlohmann::json::exception& e) {
       throw fail(fmt::format("bad metadata ({})", e.what()));
     }
-    if (a.local_count <= 0 || a.pixel_count <= 0 || a.pixel_count > 65536)
-      throw fail(fmt::format("bad shape M = {}, N = {}", a.local_count, a.pixel_count));
+    if (a.local_count <= 0 || a.pixel_count <= 0 || a.bits < 1 || a.bits > 8)
+      throw fail(fmt::format("bad shape or bits: M = {}, N = {}, bits = {}", a.local_count,
+                             a.pixel_count, a.bits));
     const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
     a.offsets = r.section<std::uint32_t>("row_offsets", rows + 1);
     a.row_step = r.section<float>("row_step", rows);
     const std::uint64_t nnz = a.offsets.back();
-    a.columns = r.section<std::uint16_t>("columns", nnz);
+    if (a.wide())
+      a.columns32 = r.section<std::uint32_t>("columns", nnz);
+    else
+      a.columns16 = r.section<std::uint16_t>("columns", nnz);
     a.codes = r.section<std::uint8_t>("codes", nnz);
     // The kernel trusts these arrays, so a file that passed the checksum but was written wrong
     // must still not make it read out of bounds.
     if (a.offsets.front() != 0 || !std::is_sorted(a.offsets.begin(), a.offsets.end()))
       throw fail("row offsets are not non-decreasing from 0");
-    if (std::any_of(a.columns.begin(), a.columns.end(),
-                    [&](std::uint16_t c) { return c >= a.pixel_count; }))
+    const auto out_of_range = [&](std::uint32_t c) { return c >= std::uint32_t(a.pixel_count); };
+    if (std::any_of(a.columns16.begin(), a.columns16.end(), out_of_range) ||
+        std::any_of(a.columns32.begin(), a.columns32.end(), out_of_range))
       throw fail(fmt::format("a column index is out of range (N = {})", a.pixel_count));
     return std::make_unique<Quantized8Transfer>(std::move(a));
   }
@@ -283,10 +312,11 @@ class Quantized8Compressor final : public prt::Compressor {
   std::unique_ptr<prt::CompressedTransfer> compress(const prt::TransferInput& input,
                                                     prt::Progress& progress) const override {
     const prt::TransferMatrix& t = input.transfer;
-    if (!t.narrow_columns())
+    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
+        t.local_count() != input.grid.cell_count())
       throw prt::ParameterError(fmt::format(
-          "{} stores u16 column indices, but this transfer has N = {} > 65536 pixels", kName,
-          t.cols()));
+          "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
+          t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
     Arrays a;
     a.vertices = t.vertex_count();
     a.local_count = t.local_count();
@@ -295,11 +325,9 @@ class Quantized8Compressor final : public prt::Compressor {
     const int levels = (1 << bits_) - 1;
     const auto offsets = t.row_offsets();
     const auto counts = t.counts();
-    const auto columns = t.columns16();
     a.offsets.reserve(t.rows() + 1);
     a.offsets.push_back(0);
     a.row_step.reserve(t.rows());
-    a.columns.reserve(t.nnz());
     a.codes.reserve(t.nnz());
     double rho = 0;
     for (std::size_t row = 0; row < t.rows(); ++row) {
@@ -317,13 +345,16 @@ class Quantized8Compressor final : public prt::Compressor {
           rho = std::max(rho, std::abs(stored - c) / c);
         }
         if (code == 0) continue;
-        a.columns.push_back(columns[k]);
+        if (a.wide())
+          a.columns32.push_back(t.column(k));
+        else
+          a.columns16.push_back(static_cast<std::uint16_t>(t.column(k)));
         a.codes.push_back(static_cast<std::uint8_t>(code));
       }
       a.offsets.push_back(static_cast<std::uint32_t>(a.codes.size()));
       if ((row + 1) % 4096 == 0) progress.advance(4096);
     }
-    progress.advance(static_cast<std::int64_t>(t.rows() % 4096));
+    progress.finish();
     a.error_bound = rho;
     return std::make_unique<Quantized8Transfer>(std::move(a));
   }
@@ -338,9 +369,14 @@ prt::CompressorEntry entry() {
   e.description =
       "example plugin (examples/plugin-template): CSR with a u8 code per entry and an f32 step "
       "per row; exact with bits=8, lossy with fewer bits";
-  e.params = {{"bits", prt::ParamType::kInt, "8", 1.0, 8.0, {},
-               "quantisation levels per row: 2^bits - 1; rows whose counts fit are stored exactly, "
-               "others are rounded (entries rounding to 0 are dropped)"}};
+  e.params = {{.key = "bits",
+               .type = prt::ParamType::kInt,
+               .default_value = "8",
+               .min = 1.0,
+               .max = 8.0,
+               .choices = {},
+               .doc = "quantisation levels per row: 2^bits - 1; rows whose counts fit are stored "
+                      "exactly, others are rounded (entries rounding to 0 are dropped)"}};
   e.lossless = false;  // bits < 8 may round; declared_error_bound() says how much
   e.create = [](const prt::ParamSet& p) {
     return std::make_unique<Quantized8Compressor>(static_cast<int>(p.get_int("bits")));
@@ -355,7 +391,9 @@ prt::CompressorEntry entry() {
 // The two entry points prt::load_plugin() looks up (compressor_registry.h). The version is
 // compiled in from the prtlab headers this plugin was built against; prtlab refuses the plugin
 // when it differs from its own, because the classes above would not match its ABI.
-QUANTIZED8_EXPORT int prtlab_plugin_api_version() { return prt::kPluginApiVersion; }
+QUANTIZED8_EXPORT int prtlab_plugin_api_version() {
+  return prt::kPluginApiVersion;
+}
 
 QUANTIZED8_EXPORT void prtlab_register_plugin(prt::CompressorRegistry& registry) {
   registry.add(quantized8::entry());

@@ -12,6 +12,8 @@
 //   all_zero           vertices whose blocks hold no non-zero at all (nnz = 0)
 //
 // Each case's description names its seed, so a failure message says how to reproduce it.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <functional>
 #include <map>

@@ -341,8 +341,13 @@ TEST(Archive, MovedInSectionsAreNotCopiedButStillRoundTrip) {
   const std::vector<float> expected = big;
   ArchiveWriter w("x", 1);
   w.add_section("values", std::move(big));
+  std::array<std::int16_t, 3> mutable_data{-1, 0, 1};
+  w.add_section("mutable_span", std::span(mutable_data));                    // span<T>
+  w.add_section("const_span", std::span<const std::int16_t>(mutable_data));  // span<const T>
   const ArchiveReader r = ArchiveReader::from_bytes(w.to_bytes(), "mem");
   expect_bit_exact(r.section<float>("values"), expected, "values");
+  EXPECT_EQ(r.section<std::int16_t>("mutable_span"), (std::vector<std::int16_t>{-1, 0, 1}));
+  EXPECT_EQ(r.section<std::int16_t>("const_span"), (std::vector<std::int16_t>{-1, 0, 1}));
 }
 
 TEST(Archive, ByteLayoutIsTheDocumentedOne) {

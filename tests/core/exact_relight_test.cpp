@@ -18,16 +18,20 @@ constexpr std::uint64_t kSeed = 20240612;
 
 // A random matrix with the structure of T: per vertex block, each column used at most once,
 // in a random row, with a random count in 1..s^2; some columns empty.
-TransferMatrix random_transfer(std::size_t vertices, int m, int n, int s, double density, std::mt19937_64& rng) {
+TransferMatrix random_transfer(std::size_t vertices, int m, int n, int s, double density,
+                               std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int> row_of(0, m - 1), count_of(1, s * s);
   std::vector<std::uint32_t> offsets{0}, cols;
   std::vector<std::uint8_t> counts;
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(static_cast<std::size_t>(m));
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(
+      static_cast<std::size_t>(m));
   for (std::size_t v = 0; v < vertices; ++v) {
     for (auto& r : rows) r.clear();
     for (int k = 0; k < n; ++k)
-      if (u(rng) < density) rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), static_cast<std::uint8_t>(count_of(rng))});
+      if (u(rng) < density)
+        rows[row_of(rng)].push_back(
+            {static_cast<std::uint32_t>(k), static_cast<std::uint8_t>(count_of(rng))});
     for (const auto& r : rows) {
       for (const auto& [c, x] : r) {
         cols.push_back(c);
@@ -51,10 +55,12 @@ std::vector<Vec3d> dense_product(const TransferMatrix& t, const std::vector<Rgb>
   std::vector<double> dense(t.rows() * t.cols(), 0.0);
   for (std::size_t row = 0; row < t.rows(); ++row)
     for (std::uint32_t i = t.row_offsets()[row]; i < t.row_offsets()[row + 1]; ++i)
-      dense[row * t.cols() + t.column(i)] = t.counts()[i] / (t.supersampling() * t.supersampling() * 1.0);
+      dense[row * t.cols() + t.column(i)] =
+          t.counts()[i] / (t.supersampling() * t.supersampling() * 1.0);
   std::vector<Vec3d> out(t.rows(), Vec3d(0.0));
   for (std::size_t row = 0; row < t.rows(); ++row)
-    for (std::size_t k = 0; k < t.cols(); ++k) out[row] += dense[row * t.cols() + k] * Vec3d(light[k]);
+    for (std::size_t k = 0; k < t.cols(); ++k)
+      out[row] += dense[row * t.cols() + k] * Vec3d(light[k]);
   return out;
 }
 
@@ -79,7 +85,8 @@ class ExactRelight : public ::testing::TestWithParam<Shape> {};
 TEST_P(ExactRelight, MatchesDenseDoubleProduct) {
   const Shape shape = GetParam();
   std::mt19937_64 rng(kSeed);
-  const TransferMatrix t = random_transfer(shape.vertices, shape.m, shape.n, shape.s, shape.density, rng);
+  const TransferMatrix t =
+      random_transfer(shape.vertices, shape.m, shape.n, shape.s, shape.density, rng);
   ASSERT_GT(t.nnz(), 0u);
   EXPECT_EQ(t.narrow_columns(), shape.n <= 65536);
   const auto light = random_light(shape.n, rng);
@@ -95,7 +102,8 @@ TEST_P(ExactRelight, MatchesDenseDoubleProduct) {
 
   const auto dbl = relight_exact_double(t, light);
   double max_diff = 0.0;
-  for (std::size_t i = 0; i < ref.size(); ++i) max_diff = std::max(max_diff, glm::length(dbl[i] - ref[i]));
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    max_diff = std::max(max_diff, glm::length(dbl[i] - ref[i]));
   EXPECT_LT(max_diff, 1e-9);
 
   const EigenSparseTransfer eig(t);
@@ -110,7 +118,8 @@ TEST_P(ExactRelight, MatchesDenseDoubleProduct) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Shapes, ExactRelight,
-                         ::testing::Values(Shape{40, 16, 96, 2, 0.5}, Shape{25, 64, 6 * 16 * 16, 2, 0.3},
+                         ::testing::Values(Shape{40, 16, 96, 2, 0.5},
+                                           Shape{25, 64, 6 * 16 * 16, 2, 0.3},
                                            Shape{7, 9, 6 * 8 * 8, 3, 0.9},
                                            Shape{3, 4, 70000, 2, 0.01}));  // 32-bit columns
 

@@ -44,8 +44,8 @@ std::vector<Vec3d> random_sh_light(int order, std::mt19937_64& rng) {
 // midpoint rule on a G x G grid of the area-preserving square -> hemisphere map (every cell
 // has solid angle 2 pi / G^2, and the domain is exactly the hemisphere: no horizon error).
 template <typename Visible>
-std::vector<Vec3d> reference_projection(const LocalFrame& frame, const std::vector<Vec3d>& light, int order, int g,
-                                        Visible visible) {
+std::vector<Vec3d> reference_projection(const LocalFrame& frame, const std::vector<Vec3d>& light,
+                                        int order, int g, Visible visible) {
   const int n = sh_count(order);
   std::vector<Vec3d> c(static_cast<std::size_t>(n), Vec3d(0.0));
   std::vector<double> yl(n), yg(n);
@@ -109,7 +109,8 @@ TEST(ShTransfer, UnoccludedVertexGivesTheRotatedLightsHemisphereProjection) {
     const auto light = random_sh_light(order, rng);
     std::vector<Vec3d> local(light.size());
     sh.apply(v, light, local);
-    const auto ref = reference_projection(frame, light, order, 400, [](const Vec3d&) { return true; });
+    const auto ref =
+        reference_projection(frame, light, order, 400, [](const Vec3d&) { return true; });
     const double err = max_abs_diff(local, ref);
     EXPECT_LT(err, 1e-3) << "seed " << kSeed << " trial " << trial;
     RecordProperty("max_abs_error_trial_" + std::to_string(trial), std::to_string(err));
@@ -130,7 +131,8 @@ TEST(ShTransfer, TiltedUnoccludedVertexConvergesWithSupersampling) {
   const int order = 4;
   std::mt19937_64 rng(kSeed + 1);
   const auto light = random_sh_light(order, rng);
-  const auto ref = reference_projection(plane.frame(v), light, order, 400, [](const Vec3d&) { return true; });
+  const auto ref =
+      reference_projection(plane.frame(v), light, order, 400, [](const Vec3d&) { return true; });
   double previous = 1e9;
   for (int s : {1, 4}) {
     const SurfacePoint pts[] = {{Vec3d(plane.positions[v]), plane.frame(v)}};
@@ -166,15 +168,67 @@ TEST(ShTransfer, OccludedVertexMatchesVisibilityMaskedProjection) {
   result.sh->apply(0, light, local);
   const Vec3d axis = glm::normalize(centre);
   const double cos_alpha = std::cos(std::asin(rho / glm::length(centre)));
-  const auto masked = reference_projection(mesh.frame(v), light, order, 400,
-                                           [&](const Vec3d& d) { return glm::dot(d, axis) < cos_alpha; });
-  const auto open = reference_projection(mesh.frame(v), light, order, 400, [](const Vec3d&) { return true; });
+  const auto masked = reference_projection(mesh.frame(v), light, order, 400, [&](const Vec3d& d) {
+    return glm::dot(d, axis) < cos_alpha;
+  });
+  const auto open =
+      reference_projection(mesh.frame(v), light, order, 400, [](const Vec3d&) { return true; });
   const double err = max_abs_diff(local, masked);
   EXPECT_LT(err, 3e-3);
   RecordProperty("max_abs_error", std::to_string(err));
   RecordProperty("shadow_effect", std::to_string(max_abs_diff(open, masked)));
   // The sphere's shadow matters far more than that tolerance.
   EXPECT_GT(max_abs_diff(open, masked), 10 * err);
+}
+
+// The integrator factors the sum through the SH rotation of the frame; check the rotation
+// for every order, and the factored sum against the direct one.
+TEST(ShTransferIntegrator, RotationMapsShOfWorldDirectionsToLocalOnes) {
+  const SupersampledCubemap dirs(2, 1);
+  std::mt19937_64 rng(kSeed + 3);
+  std::normal_distribution<double> g;
+  auto random_unit = [&] { return glm::normalize(Vec3d(g(rng), g(rng), g(rng))); };
+  for (int order = 1; order <= kMaxShOrder; ++order) {
+    const ShTransferIntegrator integ(dirs, order);
+    const int n = sh_count(order);
+    ShTransferIntegrator::Scratch scratch;
+    for (int trial = 0; trial < 3; ++trial) {
+      const LocalFrame frame = LocalFrame::from_normal(random_unit());
+      std::vector<double> r(static_cast<std::size_t>(n * n)), yw(n), yl(n);
+      integ.rotation(frame, r, scratch);
+      for (int k = 0; k < 20; ++k) {
+        const Vec3d d = random_unit();
+        sh_eval(order, d, yw);
+        sh_eval(order, frame.to_local(d), yl);
+        for (int i = 0; i < n; ++i) {
+          double ri = 0.0;
+          for (int j = 0; j < n; ++j) ri += r[static_cast<std::size_t>(i) * n + j] * yw[j];
+          ASSERT_NEAR(ri, yl[i], 1e-9) << "order " << order << ", coefficient " << i;
+        }
+      }
+    }
+  }
+}
+
+TEST(ShTransferIntegrator, FactoredSumEqualsTheDirectSum) {
+  const SupersampledCubemap dirs(8, 2);
+  const int order = 5, n = 25;
+  const ShTransferIntegrator integ(dirs, order);
+  const LocalFrame frame = LocalFrame::from_normal(glm::normalize(Vec3d(0.2, -0.5, 0.8)));
+  std::vector<std::uint32_t> rays;
+  for (std::uint32_t r = 0; r < dirs.subray_count(); r += 3) rays.push_back(r);  // > one panel
+  std::vector<double> out(n * n);
+  ShTransferIntegrator::Scratch scratch;
+  integ.integrate(frame, rays, out, scratch);
+  std::vector<double> direct(n * n, 0.0), yw(n), yl(n);
+  for (std::uint32_t r : rays) {
+    const Vec3d d = glm::normalize(dirs.direction(r));
+    sh_eval(order, d, yw);
+    sh_eval(order, frame.to_local(d), yl);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < n; ++k) direct[i * n + k] += yl[i] * yw[k] * dirs.solid_angles()[r];
+  }
+  for (int i = 0; i < n * n; ++i) ASSERT_NEAR(out[i], direct[i], 1e-10) << i;
 }
 
 TEST(ShTransfer, IntegratorOfNoRaysIsZero) {

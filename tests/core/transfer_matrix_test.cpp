@@ -60,7 +60,8 @@ TransferParams quiet_params(int r = 32, int s_grid = 8, int s = 2) {
 }
 
 // Sum over the block of point 0 of (T L)_j with L_k = solidAngle_k, in double.
-double visible_solid_angle(const TransferMatrix& t, const CubemapLayout& layout, std::size_t point) {
+double visible_solid_angle(const TransferMatrix& t, const CubemapLayout& layout,
+                           std::size_t point) {
   double sum = 0.0;
   const std::size_t m = static_cast<std::size_t>(t.local_count());
   for (std::size_t row = point * m; row < (point + 1) * m; ++row)
@@ -90,7 +91,8 @@ double horizon_bound(const SupersampledCubemap& dirs, const Vec3d& n) {
       dirs.subpixel_bounds(r, face, s0, s1, t0, t1);
       int pos = 0;
       for (double cs : {s0, s1})
-        for (double ct : {t0, t1}) pos += glm::dot(CubemapLayout::face_direction(face, cs, ct), n) > 0;
+        for (double ct : {t0, t1})
+          pos += glm::dot(CubemapLayout::face_direction(face, cs, ct), n) > 0;
       const double omega = dirs.solid_angles()[r];
       if (pos == 4) {
         pixel_bound += std::abs(share - omega);
@@ -129,7 +131,8 @@ TEST(TransferMatrix, TiltedOpenPlaneSeesTwoPiWithinTheHorizonBound) {
     const auto result = compute_transfer(plane, quiet_params(32, 8, s));
     const double sum = visible_solid_angle(result.transfer, layout, v);
     const double bound = horizon_bound(SupersampledCubemap(32, s), n);
-    SCOPED_TRACE(testing::Message() << "s = " << s << ": sum - 2pi = " << sum - kTwoPi << ", bound " << bound);
+    SCOPED_TRACE(testing::Message()
+                 << "s = " << s << ": sum - 2pi = " << sum - kTwoPi << ", bound " << bound);
     EXPECT_LE(std::abs(sum - kTwoPi), bound);
     EXPECT_LT(bound, previous_bound);  // finer supersampling, tighter bound
     EXPECT_LT(bound, 0.1 * kTwoPi);    // and a meaningful one
@@ -156,7 +159,8 @@ void expect_well_formed(const TransferMatrix& t) {
     std::set<std::uint32_t> columns;
     for (std::size_t row = v * m; row < (v + 1) * m; ++row) {
       for (std::uint32_t i = t.row_offsets()[row]; i < t.row_offsets()[row + 1]; ++i) {
-        ASSERT_TRUE(columns.insert(t.column(i)).second) << "vertex " << v << ": column " << t.column(i) << " twice";
+        ASSERT_TRUE(columns.insert(t.column(i)).second)
+            << "vertex " << v << ": column " << t.column(i) << " twice";
         ASSERT_GE(t.counts()[i], 1);
         ASSERT_LE(t.counts()[i], ss);
         ASSERT_LT(t.column(i), t.cols());
@@ -191,7 +195,8 @@ TEST(TransferMatrix, BlocksHaveOneNonZeroPerColumnAndExactValues) {
     expect_well_formed(t);
     // Occlusion happens: some values are fractional, and fewer than all upper-hemisphere
     // sub-rays escape.
-    EXPECT_TRUE(std::any_of(t.counts().begin(), t.counts().end(), [&](std::uint8_t c) { return c < s * s; }));
+    EXPECT_TRUE(std::any_of(t.counts().begin(), t.counts().end(),
+                            [&](std::uint8_t c) { return c < s * s; }));
     EXPECT_LT(result.stats.rays_unblocked, result.stats.rays_traced);
     EXPECT_EQ(result.stats.subrays, mesh.vertex_count() * 6u * 64 * s * s);
     std::uint64_t count_sum = 0;
@@ -256,7 +261,8 @@ TEST(TransferMatrix, EntriesSitInTheCellContainingThePixelCentre) {
         ++lifted;
         l = Vec3d(glm::normalize(Vec2d(l.x, l.y)), 1e-9);
       }
-      ASSERT_EQ(static_cast<int>(row % 36), grid.cell_of(l)) << "vertex " << v << ", pixel " << t.column(i);
+      ASSERT_EQ(static_cast<int>(row % 36), grid.cell_of(l))
+          << "vertex " << v << ", pixel " << t.column(i);
     }
   }
   EXPECT_GT(lifted, 0u);  // the sphere's vertices have tilted normals: some centres are lifted
@@ -282,8 +288,8 @@ TEST(TransferMatrix, FromCsrRoundTripsAndRejectsBrokenArrays) {
   std::vector<std::uint32_t> cols(t.nnz());
   for (std::size_t i = 0; i < t.nnz(); ++i) cols[i] = t.column(i);
   std::vector<std::uint8_t> counts(t.counts().begin(), t.counts().end());
-  const auto rebuilt = TransferMatrix::from_csr(t.vertex_count(), t.local_count(), static_cast<int>(t.cols()), 2,
-                                                offsets, cols, counts);
+  const auto rebuilt = TransferMatrix::from_csr(
+      t.vertex_count(), t.local_count(), static_cast<int>(t.cols()), 2, offsets, cols, counts);
   EXPECT_TRUE(rebuilt == t);
   // at() finds stored entries and returns 0 elsewhere.
   std::size_t checked = 0;
@@ -302,24 +308,29 @@ TEST(TransferMatrix, FromCsrRoundTripsAndRejectsBrokenArrays) {
     auto c = cols;
     auto n = counts;
     mutate(o, c, n);
-    EXPECT_THROW(TransferMatrix::from_csr(t.vertex_count(), t.local_count(), static_cast<int>(t.cols()), 2, o, c, n),
+    EXPECT_THROW(TransferMatrix::from_csr(t.vertex_count(), t.local_count(),
+                                          static_cast<int>(t.cols()), 2, o, c, n),
                  ParameterError);
   };
   expect_rejected([](auto&, auto&, auto& n) { n[5] = 5; });        // count above s^2
   expect_rejected([](auto&, auto&, auto& n) { n[5] = 0; });        // stored zero
   expect_rejected([&](auto&, auto& c, auto&) { c[0] = 6 * 64; });  // column out of range
   expect_rejected([](auto& o, auto&, auto&) { o.pop_back(); });    // missing offset
-  expect_rejected([](auto& o, auto&, auto&) { o.back() -= 1; });  // offsets do not end at nnz
+  expect_rejected([](auto& o, auto&, auto&) { o.back() -= 1; });   // offsets do not end at nnz
 
   // One vertex, M = 2, N = 4: the same column in both rows of a block is not a transfer block,
   // while the same column in two different vertices' blocks is fine.
   const std::vector<std::uint32_t> two_rows{0, 1, 2};
-  EXPECT_THROW(TransferMatrix::from_csr(1, 2, 4, 2, two_rows, std::vector<std::uint32_t>{3, 3}, {1, 1}),
-               ParameterError);
-  EXPECT_NO_THROW(TransferMatrix::from_csr(1, 2, 4, 2, two_rows, std::vector<std::uint32_t>{3, 2}, {1, 1}));
-  EXPECT_NO_THROW(TransferMatrix::from_csr(2, 1, 4, 2, two_rows, std::vector<std::uint32_t>{3, 3}, {1, 4}));
+  EXPECT_THROW(
+      TransferMatrix::from_csr(1, 2, 4, 2, two_rows, std::vector<std::uint32_t>{3, 3}, {1, 1}),
+      ParameterError);
+  EXPECT_NO_THROW(
+      TransferMatrix::from_csr(1, 2, 4, 2, two_rows, std::vector<std::uint32_t>{3, 2}, {1, 1}));
+  EXPECT_NO_THROW(
+      TransferMatrix::from_csr(2, 1, 4, 2, two_rows, std::vector<std::uint32_t>{3, 3}, {1, 4}));
   // Wide cubemaps switch to 32-bit column indices.
-  const auto wide = TransferMatrix::from_csr(1, 1, 70000, 1, {0, 1}, std::vector<std::uint32_t>{69999}, {1});
+  const auto wide =
+      TransferMatrix::from_csr(1, 1, 70000, 1, {0, 1}, std::vector<std::uint32_t>{69999}, {1});
   EXPECT_FALSE(wide.narrow_columns());
   EXPECT_EQ(wide.column(0), 69999u);
 }
@@ -356,8 +367,8 @@ struct Uncertainty {
 };
 
 Uncertainty uncertainty(const Config& c, const CubemapLayout& layout, const HemisphereGrid& grid,
-                                const std::vector<Rgb>& light, const Vec3d& sphere_centre, double rho,
-                                double rho_in, double offset) {
+                        const std::vector<Rgb>& light, const Vec3d& sphere_centre, double rho,
+                        double rho_in, double offset) {
   const int r = layout.resolution();
   Uncertainty u;
   u.per_cell.assign(static_cast<std::size_t>(grid.cell_count()), 0.0);
@@ -369,7 +380,8 @@ Uncertainty uncertainty(const Config& c, const CubemapLayout& layout, const Hemi
   for (int k = 0; k < layout.pixel_count(); ++k) {
     const int face = k / (r * r), x = (k % (r * r)) % r, y = (k % (r * r)) / r;
     auto sample = [&](int i, int j) {
-      return CubemapLayout::face_direction(face, 2.0 * (x + i / 4.0) / r - 1.0, 2.0 * (y + j / 4.0) / r - 1.0);
+      return CubemapLayout::face_direction(face, 2.0 * (x + i / 4.0) / r - 1.0,
+                                           2.0 * (y + j / 4.0) / r - 1.0);
     };
     // The pixel is the convex hull of its corners: its angular radius is the largest corner
     // angle, and it is wholly below the horizon when all corners are.
@@ -387,7 +399,8 @@ Uncertainty uncertainty(const Config& c, const CubemapLayout& layout, const Hemi
     for (int i = 0; i <= 4; ++i)
       for (int j = 0; j <= 4; ++j) {
         cells.insert(grid.cell_of(c.point.frame.to_local(sample(i, j))));
-        deviation = std::max(deviation, glm::length(light_fn(glm::transpose(c.q) * sample(i, j)) - centre_light));
+        deviation = std::max(
+            deviation, glm::length(light_fn(glm::transpose(c.q) * sample(i, j)) - centre_light));
       }
     const double mag = glm::length(Vec3d(light[k]));
     // Every point of the pixel is within radius / 4 (half the diagonal of a sample spacing,
@@ -448,7 +461,8 @@ TEST(TransferMatrix, RotatingSceneAndLightTogetherLeavesLocalRadianceUnchanged) 
         out[row] += t.counts()[i] * t.scale() * glm::length(Vec3d(l));
       }
     lstar.push_back(out);
-    bounds.push_back(uncertainty(c, layout, grid, light, sphere_centre, rho, rho_in, EmbreeScene(c.mesh).ray_offset()));
+    bounds.push_back(uncertainty(c, layout, grid, light, sphere_centre, rho, rho_in,
+                                 EmbreeScene(c.mesh).ray_offset()));
   }
 
   double total0 = 0, total1 = 0, max_rel_diff = 0;
@@ -486,8 +500,11 @@ TEST(TransferMatrix, RotatingSceneAndLightTogetherLeavesLocalRadianceUnchanged) 
 
 TEST(TransferMatrix, RejectsMeshWithoutNormals) {
   Mesh mesh = make_plane(1.0, 1.0, 1);
+  Mesh degenerate = mesh;
   mesh.normals.clear();
   EXPECT_THROW(compute_transfer(mesh, quiet_params()), ParameterError);
+  degenerate.normals[1] = Vec3(0.f);
+  EXPECT_THROW(compute_transfer(degenerate, quiet_params()), ParameterError);
 }
 
 }  // namespace

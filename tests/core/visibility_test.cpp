@@ -28,8 +28,10 @@ std::array<Vec3d, 4> pixel_corners(const CubemapLayout& layout, int k) {
   const int r = layout.resolution();
   const int face = k / (r * r), x = (k % (r * r)) % r, y = (k % (r * r)) / r;
   auto c = [&](int i) { return 2.0 * i / r - 1.0; };
-  return {CubemapLayout::face_direction(face, c(x), c(y)), CubemapLayout::face_direction(face, c(x + 1), c(y)),
-          CubemapLayout::face_direction(face, c(x + 1), c(y + 1)), CubemapLayout::face_direction(face, c(x), c(y + 1))};
+  return {CubemapLayout::face_direction(face, c(x), c(y)),
+          CubemapLayout::face_direction(face, c(x + 1), c(y)),
+          CubemapLayout::face_direction(face, c(x + 1), c(y + 1)),
+          CubemapLayout::face_direction(face, c(x), c(y + 1))};
 }
 
 class SupersampledTable : public ::testing::TestWithParam<std::pair<int, int>> {};
@@ -47,13 +49,15 @@ TEST_P(SupersampledTable, SubpixelsTileTheirPixels) {
     ASSERT_EQ(layout.pixel_of(d), dirs.pixel_of_subray(i)) << "sub-ray " << i;
     per_pixel[dirs.pixel_of_subray(i)] += dirs.solid_angles()[i];
   }
-  for (int k = 0; k < layout.pixel_count(); ++k) ASSERT_NEAR(per_pixel[k], layout.solid_angle(k), 1e-12) << k;
+  for (int k = 0; k < layout.pixel_count(); ++k)
+    ASSERT_NEAR(per_pixel[k], layout.solid_angle(k), 1e-12) << k;
   const double total = std::accumulate(dirs.solid_angles().begin(), dirs.solid_angles().end(), 0.0);
   EXPECT_NEAR(total, kFourPi, 1e-9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Sizes, SupersampledTable,
-                         ::testing::Values(std::pair{1, 1}, std::pair{4, 3}, std::pair{8, 2}, std::pair{32, 2}));
+                         ::testing::Values(std::pair{1, 1}, std::pair{4, 3}, std::pair{8, 2},
+                                           std::pair{32, 2}));
 
 TEST(SupersampledCubemap, RejectsBadParameters) {
   EXPECT_THROW(SupersampledCubemap(0, 2), ParameterError);
@@ -66,13 +70,15 @@ TEST(EmbreeScene, SingleRayHitsAndMisses) {
   const EmbreeScene scene(plane);
   EXPECT_TRUE(scene.occluded({0.2, 1.0, 0.3}, {0, -1, 0}));
   EXPECT_FALSE(scene.occluded({0.2, 1.0, 0.3}, {0, 1, 0}));
-  EXPECT_FALSE(scene.occluded({1.5, 1.0, 0.0}, {0, -1, 0}));  // passes beside the plane
+  EXPECT_FALSE(scene.occluded({1.5, 1.0, 0.0}, {0, -1, 0}));            // passes beside the plane
   EXPECT_FALSE(scene.occluded({0.2, 1.0, 0.3}, {0, -1, 0}, 0.0, 0.5));  // segment ends before it
   EXPECT_NEAR(scene.bounds_diagonal(), std::sqrt(8.0), 1e-6);
   EXPECT_NEAR(scene.ray_offset(), 1e-4 * std::sqrt(8.0), 1e-9);
 }
 
-TEST(EmbreeScene, RejectsEmptyMesh) { EXPECT_THROW(EmbreeScene(Mesh{}), ParameterError); }
+TEST(EmbreeScene, RejectsEmptyMesh) {
+  EXPECT_THROW(EmbreeScene(Mesh{}), ParameterError);
+}
 
 // A point on an open plane sees exactly the pixels above its tangent plane.
 TEST(Visibility, OpenPlaneSeesTheUpperHemisphere) {

@@ -62,14 +62,15 @@ std::string element_type_name(ElementType type);
 /// Bytes per element (0 for a value outside the enum).
 std::size_t element_size(ElementType type);
 
-/// Types a section can hold: fixed-size integers and IEEE floats (bool and long double are
-/// excluded; std::byte is stored as uint8).
+/// Types a section can hold: fixed-size integers and IEEE floats, unqualified (bool and long
+/// double are excluded; std::byte is stored as uint8).
 template <typename T>
-concept ArchiveElement = std::is_same_v<T, std::byte> ||
-                         (std::is_integral_v<T> && !std::is_same_v<T, bool> &&
-                          (sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8)) ||
-                         (std::is_floating_point_v<T> && std::numeric_limits<T>::is_iec559 &&
-                          (sizeof(T) == 4 || sizeof(T) == 8));
+concept ArchiveElement = std::is_same_v<T, std::remove_cv_t<T>> &&
+    (std::is_same_v<T, std::byte> ||
+     (std::is_integral_v<T> && !std::is_same_v<T, bool> &&
+      (sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8)) ||
+     (std::is_floating_point_v<T> && std::numeric_limits<T>::is_iec559 &&
+      (sizeof(T) == 4 || sizeof(T) == 8)));
 
 template <ArchiveElement T>
 constexpr ElementType element_type_of() {
@@ -116,10 +117,14 @@ class ArchiveWriter {
   const nlohmann::json& meta() const { return meta_; }
 
   /// Adds a section. name: 1..255 bytes, unique in the archive (ParameterError otherwise).
-  template <ArchiveElement T>
-  ArchiveWriter& add_section(std::string name, std::span<const T> values) {
+  template <ArchiveElement T, std::size_t E>
+  ArchiveWriter& add_section(std::string name, std::span<const T, E> values) {
     return add_vector<T>(std::move(name),
                          std::make_shared<std::vector<T>>(values.begin(), values.end()));
+  }
+  template <ArchiveElement T, std::size_t E>
+  ArchiveWriter& add_section(std::string name, std::span<T, E> values) {
+    return add_section(std::move(name), std::span<const T, E>(values));
   }
   template <ArchiveElement T>
   ArchiveWriter& add_section(std::string name, const std::vector<T>& values) {

@@ -1,5 +1,5 @@
 #pragma once
-// Nothing prtlab writes is ever half-written: output goes to "<path>.tmp.<pid>" and is renamed
+// Nothing prtlab writes is ever half-written: output goes to "<path>.tmp.<pid>.<n>" and is renamed
 // over the destination only after a successful close.
 #include <filesystem>
 #include <functional>

@@ -34,6 +34,9 @@ struct CompressorEntry {
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
   std::function<std::unique_ptr<CompressedTransfer>(const ArchiveReader&)> load;
   std::string origin = "built-in";  ///< "built-in" or the plugin's path
+  /// Bump whenever the backend's compressed output for the same input and parameters changes
+  /// (algorithm or file layout): it is part of the stage-cache key of compressed results.
+  std::uint32_t version = 1;
 };
 
 class CompressorRegistry {

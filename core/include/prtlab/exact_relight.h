@@ -11,11 +11,10 @@
 //   relight_exact_double  the same sum accumulated in double: the reference for float error.
 //   EigenSparseTransfer   Eigen::SparseMatrix<float, RowMajor> times an N x 3 column-major
 //                         dense matrix, written the usual way (outside baseline).
-#include <span>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <span>
+#include <vector>
 
 #include "prtlab/local_radiance.h"
 #include "prtlab/transfer_matrix.h"

@@ -16,11 +16,10 @@
 // tangent plane that escape) of y_i(F^T d_r) y_k(d_r) dOmega_r, with dOmega_r the exact solid
 // angle of the sub-pixel. Accumulated and stored in double, n^2 values per vertex, row-major:
 // matrix(v)[i * n + k] with i the local and k the global index.
+#include <Eigen/Core>
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "prtlab/local_frame.h"
 #include "prtlab/types.h"
@@ -31,7 +30,8 @@ class SupersampledCubemap;
 
 class ShTransfer {
  public:
-  using MatrixMap = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+  using MatrixMap =
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
 
   ShTransfer() = default;
   /// Zero matrices for `vertices` points, SH order 1..10 (n = order^2).
@@ -59,7 +59,15 @@ class ShTransfer {
 };
 
 /// Quadrature of one point's SH transfer from its unblocked sub-rays (the per-vertex step of
-/// compute_transfer, exposed for tests). Holds y_k(d_r) dOmega_r for every sub-ray.
+/// compute_transfer, exposed for tests).
+///
+/// It uses M_p = R_p V_p, an exact identity for the quadrature sum: y(F^T d) = R_p y(d) for
+/// every direction d, with R_p the SH rotation matrix of F^T (block diagonal by band), so
+///     sum_r y(F^T d_r) y(d_r)^T w_r = R_p sum_r y(d_r) y(d_r)^T w_r = R_p V_p.
+/// V_p is symmetric (a rank-k update over the unblocked sub-rays, from a table of
+/// y(d_r) sqrt(dOmega_r)), and R_p is solved once per point from the SH of a fixed set of
+/// 2 n + 16 directions (least squares, exact since rotations keep every band). This halves
+/// the multiply-adds of the direct sum and needs no SH evaluation per ray.
 class ShTransferIntegrator {
  public:
   ShTransferIntegrator(const SupersampledCubemap& dirs, int order);
@@ -67,16 +75,20 @@ class ShTransferIntegrator {
   int order() const { return order_; }
   /// Scratch buffers, one per thread.
   struct Scratch {
-    std::vector<double> local, global;
+    std::vector<double> panel, gram, rotation, local;
   };
-  /// out (n x n row-major) = sum over r in `unblocked` of y(F^T d_r) [y(d_r) dOmega_r]^T.
-  void integrate(const LocalFrame& frame, std::span<const std::uint32_t> unblocked, std::span<double> out,
-                 Scratch& scratch) const;
+  /// out (n x n row-major) = sum over r in `unblocked` of y(F^T d_r) y(d_r)^T dOmega_r.
+  void integrate(const LocalFrame& frame, std::span<const std::uint32_t> unblocked,
+                 std::span<double> out, Scratch& scratch) const;
+  /// R with y(F^T d) = R y(d) (n x n row-major), for tests.
+  void rotation(const LocalFrame& frame, std::span<double> out, Scratch& scratch) const;
 
  private:
   const SupersampledCubemap* dirs_;
   int order_;
-  std::vector<double> weighted_;  ///< subray_count x n, y_k(d_r) dOmega_r
+  std::vector<double> table_;    ///< subray_count x n: y_k(d_r) sqrt(dOmega_r)
+  std::vector<Vec3d> samples_;   ///< P fixed directions for solving R
+  std::vector<double> pinv_;     ///< n x P row-major: pseudo-inverse of [y(samples)] (P x n)
 };
 
 }  // namespace prt

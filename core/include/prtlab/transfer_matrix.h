@@ -64,8 +64,9 @@ class TransferMatrix {
   /// monotone and ending at nnz, columns < N and strictly increasing per row, counts in
   /// 1..s^2, at most one entry per column of a vertex block) and throws ParameterError naming
   /// the first violation. `columns` are narrowed to u16 when N <= 65536.
-  static TransferMatrix from_csr(std::size_t vertices, int local_count, int pixel_count, int supersampling,
-                                 std::vector<std::uint32_t> row_offsets, std::span<const std::uint32_t> columns,
+  static TransferMatrix from_csr(std::size_t vertices, int local_count, int pixel_count,
+                                 int supersampling, std::vector<std::uint32_t> row_offsets,
+                                 std::span<const std::uint32_t> columns,
                                  std::vector<std::uint8_t> counts);
 
   std::size_t vertex_count() const { return vertices_; }
@@ -113,12 +114,12 @@ class TransferMatrix {
 };
 
 struct TransferParams {
-  int cubemap_resolution = 32;  ///< R: N = 6 R^2
-  int local_grid = 8;           ///< S: M = S^2
-  int supersampling = 2;        ///< s: s x s visibility rays per pixel
+  int cubemap_resolution = 32;        ///< R: N = 6 R^2
+  int local_grid = 8;                 ///< S: M = S^2
+  int supersampling = 2;              ///< s: s x s visibility rays per pixel
   double ray_offset_relative = 1e-4;  ///< origin offset along the normal / bbox diagonal
-  int sh_order = 0;             ///< 0: no SH transfer; 1..10 (5 gives 25 x 25 per vertex)
-  bool show_progress = true;    ///< a terminal progress bar (also off under Progress::set_quiet)
+  int sh_order = 0;                   ///< 0: no SH transfer; 1..10 (5 gives 25 x 25 per vertex)
+  bool show_progress = true;  ///< a terminal progress bar (also off under Progress::set_quiet)
 };
 
 /// A receiver point: where visibility is computed, and the frame that defines its local cells.
@@ -140,9 +141,9 @@ struct TransferStats {
   double seconds_points = 0;         ///< the parallel per-point pass (wall)
   double seconds_assemble = 0;       ///< serial appends of the per-point blocks (wall)
   // CPU seconds summed over threads (CLOCK_THREAD_CPUTIME_ID, so not inflated by a loaded machine):
-  double thread_seconds_trace = 0;   ///< Embree occlusion packets
-  double thread_seconds_bin = 0;     ///< pixel -> local cell, block sort
-  double thread_seconds_sh = 0;      ///< SH transfer quadrature
+  double thread_seconds_trace = 0;  ///< Embree occlusion packets
+  double thread_seconds_bin = 0;    ///< pixel -> local cell, block sort
+  double thread_seconds_sh = 0;     ///< SH transfer quadrature
   /// Traced rays per second of the per-point pass (wall clock, all threads).
   double rays_per_second() const { return seconds_points > 0 ? rays_traced / seconds_points : 0.0; }
   /// Traced rays per CPU second of tracing (one thread's throughput).

@@ -31,13 +31,15 @@ class SupersampledCubemap {
  public:
   SupersampledCubemap(int resolution, int supersampling);
 
-  int resolution() const { return r_; }        ///< R
-  int supersampling() const { return s_; }     ///< s
+  int resolution() const { return r_; }            ///< R
+  int supersampling() const { return s_; }         ///< s
   int pixel_count() const { return 6 * r_ * r_; }  ///< N
   int subrays_per_pixel() const { return s_ * s_; }
   std::size_t subray_count() const { return dir_x_.size(); }  ///< N s^2
   /// Global pixel of sub-ray r.
-  int pixel_of_subray(std::size_t r) const { return static_cast<int>(r / static_cast<std::size_t>(s_ * s_)); }
+  int pixel_of_subray(std::size_t r) const {
+    return static_cast<int>(r / static_cast<std::size_t>(s_ * s_));
+  }
 
   /// Unit direction of sub-ray r (double, from the float tables the tracer uses).
   Vec3d direction(std::size_t r) const { return {dir_x_[r], dir_y_[r], dir_z_[r]}; }
@@ -50,7 +52,8 @@ class SupersampledCubemap {
   std::span<const double> solid_angles() const { return solid_angle_; }
   /// Face coordinates (s, t) in [-1, 1] of the corners of sub-pixel r (for error bounds):
   /// corners are (s0, t0), (s1, t0), (s1, t1), (s0, t1) on face r / (s^2 R^2).
-  void subpixel_bounds(std::size_t r, int& face, double& s0, double& s1, double& t0, double& t1) const;
+  void subpixel_bounds(std::size_t r, int& face, double& s0, double& s1, double& t0,
+                       double& t1) const;
 
  private:
   int r_, s_;
@@ -83,8 +86,8 @@ class EmbreeScene {
   /// number of unblocked sub-rays of pixel k (0..s^2); counts.size() must be N. When
   /// `unblocked` is given it receives the ids of the unblocked sub-rays in increasing order.
   /// Returns the number of rays traced (the sub-rays strictly above the tangent plane).
-  std::uint64_t visibility(const SupersampledCubemap& dirs, const Vec3d& position, const Vec3d& normal,
-                           std::span<std::uint8_t> counts,
+  std::uint64_t visibility(const SupersampledCubemap& dirs, const Vec3d& position,
+                           const Vec3d& normal, std::span<std::uint8_t> counts,
                            std::vector<std::uint32_t>* unblocked = nullptr) const;
 
  private:
