@@ -88,7 +88,8 @@ prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
   for (std::size_t v = 0; v < vertices; ++v) {
     for (auto& r : rows) r.clear();
     for (int k = 0; k < n; ++k)
-      if (u(rng) < 2650.0 / n) rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), count_of(rng)});
+      if (u(rng) < 2650.0 / n)
+        rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), count_of(rng)});
     for (const auto& r : rows) {
       for (const auto& [c, x] : r) {
         cols.push_back(c);
@@ -97,7 +98,8 @@ prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
       offsets.push_back(static_cast<std::uint32_t>(cols.size()));
     }
   }
-  return prt::TransferMatrix::from_csr(vertices, m, n, 2, std::move(offsets), cols, std::move(counts));
+  return prt::TransferMatrix::from_csr(vertices, m, n, 2, std::move(offsets), cols,
+                                       std::move(counts));
 }
 
 Workload make_workload() {
@@ -113,10 +115,12 @@ Workload make_workload() {
     w.key = st.key;
     w.resolution = desc.cubemap_resolution;
     w.grid_side = desc.local_grid;
-    w.source = fmt::format("bunny ({} vertices, transfer {} in {:.1f} s)", w.transfer.vertex_count(),
-                           st.cache_hit ? "from the stage cache" : "computed", st.seconds);
+    w.source =
+        fmt::format("bunny ({} vertices, transfer {} in {:.1f} s)", w.transfer.vertex_count(),
+                    st.cache_hit ? "from the stage cache" : "computed", st.seconds);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bunny unavailable (%s); using a synthetic matrix of its shape\n", e.what());
+    std::fprintf(stderr, "bunny unavailable (%s); using a synthetic matrix of its shape\n",
+                 e.what());
     w.transfer = synthetic_bunny_shape(rng);
     w.key = prt::Hasher().add("synthetic-bunny-shape").add(std::uint64_t{20240613}).digest();
     w.source = "synthetic 210,304 x 6,144 (bunny data unavailable)";
@@ -183,7 +187,9 @@ double stream_pass(int threads) {
   return s;
 }
 
-int all_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+int all_threads() {
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 // The reference bandwidth for %bw: median of 15 passes with every thread, in GB/s (1e9 B/s).
 double measured_bandwidth() {
@@ -240,7 +246,8 @@ Prepared& prepared(const std::string& backend, const Params& params) {
   const Workload& w = workload();
   Prepared p;
   prt::StageCache cache;
-  auto result = prt::compress_cached(backend, params, prt::TransferInput{w.transfer, nullptr, *w.cubemap, *w.grid},
+  auto result = prt::compress_cached(backend, params,
+                                     prt::TransferInput{w.transfer, nullptr, *w.cubemap, *w.grid},
                                      w.key, cache, prt::CacheMode::kUse, false);
   p.ct = std::move(result.compressed);
   p.compress_seconds = result.compress_seconds;
@@ -280,10 +287,11 @@ void BM_BackendCpp(benchmark::State& state, const std::string& backend) {
     state.SetIterationTime(s);
     total += s;
   }
-  add_counters(state, total / static_cast<double>(state.iterations()), p->ct->flops_per_relight() / 2,
-               relight_bytes(*p));
+  add_counters(state, total / static_cast<double>(state.iterations()),
+               p->ct->flops_per_relight() / 2, relight_bytes(*p));
   state.SetLabel(fmt::format("{:.2f} MB, {:.1f} MFLOP{}", p->ct->storage().total_bytes() * 1e-6,
-                             p->ct->flops_per_relight() * 1e-6, p->cache_hit ? "" : ", compressed now"));
+                             p->ct->flops_per_relight() * 1e-6,
+                             p->cache_hit ? "" : ", compressed now"));
 }
 
 void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const Params& params) {
@@ -298,8 +306,11 @@ void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const
     if (!p->device_tried) {
       p->device_tried = true;
       p->device = p->ct->upload(*ctx);
-      if (!p->device) p->device_error = backend + " has no OpenCL relight";
-      else p->device->relight_on_device(p->coeffs);  // first launch compiles for the group size
+      if (!p->device) {
+        p->device_error = backend + " has no OpenCL relight";
+      } else {
+        p->device->relight_on_device(p->coeffs);  // first launch compiles for the group size
+      }
     }
   } catch (const std::exception& e) {
     if (p) p->device_error = e.what();
@@ -316,8 +327,8 @@ void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const
     state.SetIterationTime(s);
     total += s;
   }
-  add_counters(state, total / static_cast<double>(state.iterations()), p->ct->flops_per_relight() / 2,
-               relight_bytes(*p));
+  add_counters(state, total / static_cast<double>(state.iterations()),
+               p->ct->flops_per_relight() / 2, relight_bytes(*p));
   state.SetLabel(ctx->info().device_name);
 }
 
@@ -343,8 +354,10 @@ void BM_Eigen(benchmark::State& state) {
     total += s;
   }
   // Eigen reads int columns and float values: 8 bytes per non-zero, 4 per row offset.
-  const double bytes = static_cast<double>(w.transfer.nnz() * 8 + (w.transfer.rows() + 1) * 4 + w.transfer.cols() * 12);
-  add_counters(state, total / static_cast<double>(state.iterations()), static_cast<double>(w.transfer.nnz()), bytes);
+  const double bytes = static_cast<double>(w.transfer.nnz() * 8 + (w.transfer.rows() + 1) * 4 +
+                                           w.transfer.cols() * 12);
+  add_counters(state, total / static_cast<double>(state.iterations()),
+               static_cast<double>(w.transfer.nnz()), bytes);
 }
 
 void run_csr_one_thread(benchmark::State& state, const prt::TransferMatrix& t) {
@@ -364,7 +377,9 @@ void run_csr_one_thread(benchmark::State& state, const prt::TransferMatrix& t) {
   state.counters["ns/term"] = per * 1e9 / static_cast<double>(t.nnz());
 }
 
-void BM_CsrOneThread(benchmark::State& state) { run_csr_one_thread(state, workload().transfer); }
+void BM_CsrOneThread(benchmark::State& state) {
+  run_csr_one_thread(state, workload().transfer);
+}
 
 // The first vertices of T, about 200 KB of CSR arrays: they stay in L2 across iterations.
 void BM_CsrCacheResident(benchmark::State& state) {
@@ -372,15 +387,19 @@ void BM_CsrCacheResident(benchmark::State& state) {
     const prt::TransferMatrix& t = workload().transfer;
     const std::size_t m = static_cast<std::size_t>(t.local_count());
     std::size_t vertices = 0;
-    while (vertices < t.vertex_count() && t.row_offsets()[(vertices + 1) * m] * 3 < 200'000) ++vertices;
+    while (vertices < t.vertex_count() && t.row_offsets()[(vertices + 1) * m] * 3 < 200'000)
+      ++vertices;
     vertices = std::max<std::size_t>(vertices, 1);
     const std::size_t rows = vertices * m, nnz = t.row_offsets()[rows];
-    std::vector<std::uint32_t> offsets(t.row_offsets().begin(), t.row_offsets().begin() + static_cast<long>(rows) + 1);
+    std::vector<std::uint32_t> offsets(t.row_offsets().begin(),
+                                       t.row_offsets().begin() + static_cast<long>(rows) + 1);
     std::vector<std::uint32_t> cols(nnz);
     for (std::size_t i = 0; i < nnz; ++i) cols[i] = t.column(i);
-    std::vector<std::uint8_t> counts(t.counts().begin(), t.counts().begin() + static_cast<long>(nnz));
-    return prt::TransferMatrix::from_csr(vertices, t.local_count(), static_cast<int>(t.cols()), t.supersampling(),
-                                         std::move(offsets), cols, std::move(counts));
+    std::vector<std::uint8_t> counts(t.counts().begin(),
+                                     t.counts().begin() + static_cast<long>(nnz));
+    return prt::TransferMatrix::from_csr(vertices, t.local_count(), static_cast<int>(t.cols()),
+                                         t.supersampling(), std::move(offsets), cols,
+                                         std::move(counts));
   }();
   run_csr_one_thread(state, head);
   state.SetLabel(fmt::format("{} vertices, {} non-zeros", head.vertex_count(), head.nnz()));
@@ -437,10 +456,12 @@ class CollectingReporter : public benchmark::ConsoleReporter {
 void print_summary(const CollectingReporter& rep) {
   const Workload& w = workload();
   std::printf("\nSummary (medians over repetitions where run with --benchmark_repetitions)\n");
-  std::printf("  workload: %s: %zu x %zu, %zu non-zeros\n", w.source.c_str(), w.transfer.rows(), w.transfer.cols(),
-              w.transfer.nnz());
-  std::printf("  read bandwidth (stream, %d threads, median of 15): %.1f GB/s\n", all_threads(), measured_bandwidth());
-  if (auto one = rep.get("stream_read/threads:1")) std::printf("  read bandwidth, 1 thread: %.1f GB/s\n", one->gbps);
+  std::printf("  workload: %s: %zu x %zu, %zu non-zeros\n", w.source.c_str(), w.transfer.rows(),
+              w.transfer.cols(), w.transfer.nnz());
+  std::printf("  read bandwidth (stream, %d threads, median of 15): %.1f GB/s\n", all_threads(),
+              measured_bandwidth());
+  if (auto one = rep.get("stream_read/threads:1"))
+    std::printf("  read bandwidth, 1 thread: %.1f GB/s\n", one->gbps);
 
   const auto cpp = rep.get("relight/uncompressed/cpp");
   const auto one = rep.get("relight/csr_one_thread/cpp");
@@ -461,10 +482,11 @@ void print_summary(const CollectingReporter& rep) {
     std::printf("\n");
   }
   if (ocl && best_cpp)
-    std::printf("  GOAL OpenCL (default variant) within 1.2x of the best C++ loop: %.2fx -> %s\n", ocl->ms / *best_cpp,
-                ocl->ms <= 1.2 * *best_cpp ? "met" : "NOT met");
+    std::printf("  GOAL OpenCL (default variant) within 1.2x of the best C++ loop: %.2fx -> %s\n",
+                ocl->ms / *best_cpp, ocl->ms <= 1.2 * *best_cpp ? "met" : "NOT met");
   if (eigen && cpp)
-    std::printf("  Eigen / uncompressed C++: %.2fx (Eigen %.3f ms)\n", eigen->ms / cpp->ms, eigen->ms);
+    std::printf("  Eigen / uncompressed C++: %.2fx (Eigen %.3f ms)\n", eigen->ms / cpp->ms,
+                eigen->ms);
   if (eigen && ocl)
     std::printf("  GOAL OpenCL at least 2x faster than Eigen: %.2fx -> %s\n", eigen->ms / ocl->ms,
                 eigen->ms >= 2.0 * ocl->ms ? "met" : "NOT met");
@@ -472,10 +494,14 @@ void print_summary(const CollectingReporter& rep) {
   if (one && hot) {
     // Equal per-entry costs with and without memory traffic: the loop is bound by per-entry work
     // (index load, gather, multiply-add), not by bytes.
-    std::printf("  where the multiply is bound (one thread): %.3f ns per non-zero streaming the whole matrix from\n"
-                "  memory at %.2f GB/s (%.1f%% of the read bandwidth), %.3f ns per non-zero on an L2-resident block:\n"
-                "  memory traffic adds %.0f%% to the per-entry cost\n",
-                one->ns_term, one->gbps, one->pct, hot->ns_term, 100.0 * (one->ns_term / hot->ns_term - 1.0));
+    std::printf(
+        "  where the multiply is bound (one thread): %.3f ns per non-zero streaming the whole "
+        "matrix from\n"
+        "  memory at %.2f GB/s (%.1f%% of the read bandwidth), %.3f ns per non-zero on an "
+        "L2-resident block:\n"
+        "  memory traffic adds %.0f%% to the per-entry cost\n",
+        one->ns_term, one->gbps, one->pct, hot->ns_term,
+        100.0 * (one->ns_term / hot->ns_term - 1.0));
   }
 }
 
@@ -490,21 +516,25 @@ void register_benchmarks() {
     benchmark::RegisterBenchmark(("relight/" + name + "/cpp").c_str(), BM_BackendCpp, name)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
-    benchmark::RegisterBenchmark(("relight/" + name + "/opencl").c_str(), BM_BackendOpenCl, name, Params{})
+    benchmark::RegisterBenchmark(("relight/" + name + "/opencl").c_str(), BM_BackendOpenCl, name,
+                                 Params{})
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
     for (const auto& spec : prt::CompressorRegistry::instance().get(name).params) {
       if (!spec.key.starts_with("opencl_") || spec.type != prt::ParamType::kString) continue;
       for (const auto& choice : spec.choices) {
         if (choice == spec.default_value) continue;
-        benchmark::RegisterBenchmark(("relight/" + name + "/opencl/" + spec.key + "=" + choice).c_str(),
-                                     BM_BackendOpenCl, name, Params{{spec.key, choice}})
+        benchmark::RegisterBenchmark(
+            ("relight/" + name + "/opencl/" + spec.key + "=" + choice).c_str(), BM_BackendOpenCl,
+            name, Params{{spec.key, choice}})
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond);
       }
     }
   }
-  benchmark::RegisterBenchmark("relight/eigen_sparse/cpp", BM_Eigen)->UseManualTime()->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("relight/eigen_sparse/cpp", BM_Eigen)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("relight/csr_one_thread/cpp", BM_CsrOneThread)
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond);
@@ -528,8 +558,9 @@ int main(int argc, char** argv) {
   benchmark::AddCustomContext("build_type", build.build_type);
   benchmark::AddCustomContext("machine", prt::machine_description());
   benchmark::AddCustomContext("workload", w.source);
-  benchmark::AddCustomContext("transfer", fmt::format("{} x {}, {} non-zeros, s = {}", w.transfer.rows(),
-                                                      w.transfer.cols(), w.transfer.nnz(), w.transfer.supersampling()));
+  benchmark::AddCustomContext(
+      "transfer", fmt::format("{} x {}, {} non-zeros, s = {}", w.transfer.rows(), w.transfer.cols(),
+                              w.transfer.nnz(), w.transfer.supersampling()));
   benchmark::AddCustomContext("opencl_device", ctx ? ctx->info().label() : "none");
   benchmark::AddCustomContext("read_bandwidth_GBps", fmt::format("{:.2f}", measured_bandwidth()));
 

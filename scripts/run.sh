@@ -21,5 +21,15 @@ echo "== scene info: bunny"
 echo "== environment: courtyard"
 "$PRTLAB" env info courtyard
 "$PRTLAB" env cubemap courtyard --res 32 --out "$OUT/courtyard-32.exr" --preview "$OUT/courtyard-32.png"
+echo "== transfer: bunny (cached after the first run)"
+"$PRTLAB" precompute bunny
+"$PRTLAB" -q precompute bunny --json > "$OUT/bunny-transfer.json.tmp" && mv "$OUT/bunny-transfer.json.tmp" "$OUT/bunny-transfer.json"
+echo "== backends on bunny"
+for backend in $("$PRTLAB" list --json | python3 -c 'import json,sys; print(" ".join(b["name"] for b in json.load(sys.stdin)["backends"]))'); do
+  echo "-- $backend"
+  "$PRTLAB" compress bunny --backend "$backend"
+  "$PRTLAB" -q compress bunny --backend "$backend" --json > "$OUT/bunny-$backend.json.tmp"
+  mv "$OUT/bunny-$backend.json.tmp" "$OUT/bunny-$backend.json"
+done
 echo "main job done: outputs in $OUT/"
 ls -l "$OUT"

@@ -14,13 +14,14 @@ class UncompressedCompressor final : public Compressor {
  public:
   explicit UncompressedCompressor(Options options) : options_(options) {}
 
-  std::unique_ptr<CompressedTransfer> compress(const TransferInput& input, Progress& progress) const override {
+  std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
+                                               Progress& progress) const override {
     const TransferMatrix& t = input.transfer;
     if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
         t.local_count() != input.grid.cell_count()) {
-      throw ParameterError(fmt::format("{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}",
-                                       kName, t.local_count(), t.cols(), input.grid.cell_count(),
-                                       input.cubemap.pixel_count()));
+      throw ParameterError(fmt::format(
+          "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
+          t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
     }
     auto out = std::make_unique<UncompressedTransfer>(t, options_);
     progress.finish();
@@ -37,12 +38,15 @@ Options options_from(const ParamSet& params) {
   o.lanes = static_cast<int>(params.get_int("opencl_lanes"));
   // The range is checked by ParamSet; the power of two is the reduction's requirement.
   if (!std::has_single_bit(static_cast<unsigned>(o.lanes)))
-    throw ParameterError(fmt::format("{}: parameter opencl_lanes={}: must be a power of two (1, 2, 4, ..., 32)",
-                                     kName, o.lanes));
+    throw ParameterError(
+        fmt::format("{}: parameter opencl_lanes={}: must be a power of two (1, 2, 4, ..., 32)",
+                    kName, o.lanes));
   return o;
 }
 
-std::string column_type(const TransferMatrix& t) { return t.narrow_columns() ? "u16" : "u32"; }
+std::string column_type(const TransferMatrix& t) {
+  return t.narrow_columns() ? "u16" : "u32";
+}
 
 }  // namespace
 
@@ -50,14 +54,18 @@ KernelVariant parse_variant(const std::string& text) {
   if (text == "auto") return KernelVariant::kAuto;
   if (text == "rows") return KernelVariant::kRows;
   if (text == "lanes") return KernelVariant::kLanes;
-  throw ParameterError(fmt::format("{}: opencl_kernel '{}' is not one of auto, rows, lanes", kName, text));
+  throw ParameterError(
+      fmt::format("{}: opencl_kernel '{}' is not one of auto, rows, lanes", kName, text));
 }
 
 std::string_view to_string(KernelVariant v) {
   switch (v) {
-    case KernelVariant::kAuto: return "auto";
-    case KernelVariant::kRows: return "rows";
-    case KernelVariant::kLanes: return "lanes";
+    case KernelVariant::kAuto:
+      return "auto";
+    case KernelVariant::kRows:
+      return "rows";
+    case KernelVariant::kLanes:
+      return "lanes";
   }
   return "?";
 }
@@ -76,31 +84,37 @@ StorageReport UncompressedTransfer::storage() const {
   const std::uint64_t nnz = t_.nnz();
   const std::uint64_t col_bytes = t_.narrow_columns() ? 2 : 4;
   StorageReport r;
-  r.components.push_back({"row_offsets", (t_.rows() + 1) * std::uint64_t{4},
-                          "u32 per row + 1: index of the row's first entry in columns/counts (CSR), last = nnz"});
-  r.components.push_back({"columns", nnz * col_bytes,
-                          fmt::format("{} per non-zero: global pixel k (cubemap order), strictly increasing in a row",
-                                      column_type(t_))});
-  r.components.push_back({"counts", nnz, "u8 per non-zero: unblocked sub-rays c in 1..s^2; value = c * scale"});
-  r.components.push_back({"scale", 4, "f32 once: the value of a count of 1, 1/s^2 (stored as s in the metadata)"});
+  r.components.push_back(
+      {"row_offsets", (t_.rows() + 1) * std::uint64_t{4},
+       "u32 per row + 1: index of the row's first entry in columns/counts (CSR), last = nnz"});
+  r.components.push_back(
+      {"columns", nnz * col_bytes,
+       fmt::format("{} per non-zero: global pixel k (cubemap order), strictly increasing in a row",
+                   column_type(t_))});
+  r.components.push_back(
+      {"counts", nnz, "u8 per non-zero: unblocked sub-rays c in 1..s^2; value = c * scale"});
+  r.components.push_back(
+      {"scale", 4, "f32 once: the value of a count of 1, 1/s^2 (stored as s in the metadata)"});
   return r;
 }
 
 LightCoeffs UncompressedTransfer::project_light(const Cubemap& radiance) const {
   if (static_cast<std::size_t>(radiance.layout.pixel_count()) != t_.cols()) {
-    throw ParameterError(fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                                     radiance.layout.pixel_count(), radiance.layout.resolution(), t_.cols()));
+    throw ParameterError(
+        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
+                    radiance.layout.pixel_count(), radiance.layout.resolution(), t_.cols()));
   }
   return {"pixel", radiance.light_vector()};
 }
 
 void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   if (light.basis != "pixel" || light.values.size() != t_.cols()) {
-    throw ParameterError(fmt::format("{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}",
-                                     kName, t_.cols(), light.basis, light.values.size()));
+    throw ParameterError(fmt::format(
+        "{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}", kName,
+        t_.cols(), light.basis, light.values.size()));
   }
-  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() || out.vertices != t_.vertex_count() ||
-      out.values.size() != t_.rows()) {
+  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() ||
+      out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
     out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
   }
   relight_exact(t_, light.values, out.values);
@@ -130,8 +144,9 @@ void UncompressedTransfer::save(ArchiveWriter& archive) const {
 std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveReader& r) {
   const int version = r.meta_value<int>("uncompressed_version");
   if (version != kStateVersion)
-    throw InputError(r.path(), fmt::format("{} state version {} is not the version {} this build reads", kName, version,
-                                           kStateVersion));
+    throw InputError(
+        r.path(), fmt::format("{} state version {} is not the version {} this build reads", kName,
+                              version, kStateVersion));
   const auto vertices = r.meta_value<std::size_t>("vertices");
   const int m = r.meta_value<int>("local_count");
   const int n = r.meta_value<int>("pixel_count");
@@ -143,8 +158,10 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
     throw InputError(r.path(), e.what());
   }
   options.lanes = r.meta_value<int>("opencl_lanes");
-  if (options.lanes < 1 || options.lanes > 32 || !std::has_single_bit(static_cast<unsigned>(options.lanes)))
-    throw InputError(r.path(), fmt::format("{}: opencl_lanes {} is not a power of two in [1, 32]", kName, options.lanes));
+  if (options.lanes < 1 || options.lanes > 32 ||
+      !std::has_single_bit(static_cast<unsigned>(options.lanes)))
+    throw InputError(r.path(), fmt::format("{}: opencl_lanes {} is not a power of two in [1, 32]",
+                                           kName, options.lanes));
 
   std::vector<std::uint32_t> columns;
   const SectionInfo& info = r.section_info("columns");
@@ -155,8 +172,9 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
     columns = r.section<std::uint32_t>("columns");
   }
   try {
-    TransferMatrix t = TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"), columns,
-                                                r.section<std::uint8_t>("counts", columns.size()));
+    TransferMatrix t =
+        TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"),
+                                 columns, r.section<std::uint8_t>("counts", columns.size()));
     return std::make_unique<UncompressedTransfer>(std::move(t), options);
   } catch (const ParameterError& e) {
     throw InputError(r.path(), e.what());
@@ -166,12 +184,25 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
 CompressorEntry registry_entry() {
   CompressorEntry e;
   e.name = std::string(kName);
-  e.description = "exact CSR transfer (u32 row offsets, u16 columns, u8 counts x 1/s^2): the lossless reference";
+  e.description =
+      "exact CSR transfer (u32 row offsets, u16 columns, u8 counts x 1/s^2): the lossless "
+      "reference";
   e.params = {
-      {"opencl_kernel", ParamType::kString, "auto", std::nullopt, std::nullopt, {"auto", "rows", "lanes"},
-       "OpenCL variant: rows = one work-item per row (CPUs), lanes = opencl_lanes work-items per row with a "
+      {"opencl_kernel",
+       ParamType::kString,
+       "auto",
+       std::nullopt,
+       std::nullopt,
+       {"auto", "rows", "lanes"},
+       "OpenCL variant: rows = one work-item per row (CPUs), lanes = opencl_lanes work-items per "
+       "row with a "
        "local-memory reduction (GPUs), auto = by device type"},
-      {"opencl_lanes", ParamType::kInt, "8", 1.0, 32.0, {},
+      {"opencl_lanes",
+       ParamType::kInt,
+       "8",
+       1.0,
+       32.0,
+       {},
        "work-items per row of the lanes variant (a power of two)"},
   };
   e.lossless = true;

@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/SVD>
-
 #include <algorithm>
 #include <array>
 #include <cmath>

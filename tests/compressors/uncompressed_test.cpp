@@ -27,11 +27,13 @@ TransferMatrix small_transfer() {
   return TransferMatrix::from_csr(3, 4, 24, 3, std::move(offsets), columns, std::move(counts));
 }
 
-std::unique_ptr<CompressedTransfer> compress(const TransferMatrix& t, const std::map<std::string, std::string>& p = {}) {
+std::unique_ptr<CompressedTransfer> compress(const TransferMatrix& t,
+                                             const std::map<std::string, std::string>& p = {}) {
   const CubemapLayout cubemap(2);
   const HemisphereGrid grid(2);
-  return CompressorRegistry::instance().create("uncompressed", p)->compress({t, nullptr, cubemap, grid},
-                                                                            Progress::null());
+  return CompressorRegistry::instance()
+      .create("uncompressed", p)
+      ->compress({t, nullptr, cubemap, grid}, Progress::null());
 }
 
 TEST(Uncompressed, StorageIsTheCsrArraysByteForByte) {
@@ -70,7 +72,8 @@ TEST(Uncompressed, LightIsThePixelLightVectorAndRelightIsTheExactProduct) {
   EXPECT_EQ(out.dim, 4);
   EXPECT_EQ(out.vertices, 3u);
   ASSERT_EQ(out.values.size(), exact.values.size());
-  EXPECT_EQ(std::memcmp(out.values.data(), exact.values.data(), out.values.size() * sizeof(Rgb)), 0);
+  EXPECT_EQ(std::memcmp(out.values.data(), exact.values.data(), out.values.size() * sizeof(Rgb)),
+            0);
   // Row 0: count 9 (= 1.0) at column 1 and count 1 (= 1/9) at column 7.
   EXPECT_NEAR(out.values[0].z, expected[1].z + expected[7].z / 9.0, 1e-6);
 
@@ -80,14 +83,17 @@ TEST(Uncompressed, LightIsThePixelLightVectorAndRelightIsTheExactProduct) {
 }
 
 TEST(Uncompressed, LanesMustBeAPowerOfTwo) {
-  EXPECT_NE(CompressorRegistry::instance().create("uncompressed", {{"opencl_lanes", "16"}}), nullptr);
+  EXPECT_NE(CompressorRegistry::instance().create("uncompressed", {{"opencl_lanes", "16"}}),
+            nullptr);
   try {
     CompressorRegistry::instance().create("uncompressed", {{"opencl_lanes", "12"}});
     FAIL() << "accepted 12 lanes";
   } catch (const ParameterError& e) {
     EXPECT_NE(std::string(e.what()).find("power of two"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(CompressorRegistry::instance().create("uncompressed", {{"opencl_kernel", "columns"}}), ParameterError);
+  EXPECT_THROW(
+      CompressorRegistry::instance().create("uncompressed", {{"opencl_kernel", "columns"}}),
+      ParameterError);
 }
 
 TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
@@ -103,8 +109,10 @@ TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
 }
 
 TEST(Uncompressed, OptionsSurviveSaveAndLoad) {
-  const fs::path file = fs::temp_directory_path() / ("prtlab_uncompressed_" + std::to_string(::getpid()) + ".prt");
-  save_compressed(*compress(small_transfer(), {{"opencl_kernel", "lanes"}, {"opencl_lanes", "4"}}), file);
+  const fs::path file =
+      fs::temp_directory_path() / ("prtlab_uncompressed_" + std::to_string(::getpid()) + ".prt");
+  save_compressed(*compress(small_transfer(), {{"opencl_kernel", "lanes"}, {"opencl_lanes", "4"}}),
+                  file);
   const auto loaded = load_compressed(file);
   fs::remove(file);
   const auto* u = dynamic_cast<const UncompressedTransfer*>(loaded.get());
@@ -116,7 +124,8 @@ TEST(Uncompressed, OptionsSurviveSaveAndLoad) {
 
 // A well-formed archive whose CSR arrays break T's invariants: load names the file.
 TEST(Uncompressed, InconsistentFilesAreInputErrors) {
-  const fs::path file = fs::temp_directory_path() / ("prtlab_uncompressed_bad_" + std::to_string(::getpid()) + ".prt");
+  const fs::path file = fs::temp_directory_path() /
+                        ("prtlab_uncompressed_bad_" + std::to_string(::getpid()) + ".prt");
   auto write = [&](std::vector<std::uint8_t> counts, int version) {
     ArchiveWriter w("compressed-transfer", 1);
     w.add_meta("backend", "uncompressed");

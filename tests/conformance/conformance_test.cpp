@@ -46,7 +46,8 @@ namespace fs = std::filesystem;
 // PoCL's kernel cache shared by the test processes of this build (LLVM compiles each program
 // once per build, not once per test).
 const fs::path g_cache_root = [] {
-  const fs::path root = fs::temp_directory_path() / ("prtlab_conformance_" + std::to_string(::getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("prtlab_conformance_" + std::to_string(::getpid()));
   fs::create_directories(root);
   ::setenv("PRTLAB_CACHE", root.c_str(), 1);
   ::setenv("POCL_CACHE_DIR", PRTLAB_BINARY_DIR "/test-cache/pocl", 0);
@@ -115,7 +116,9 @@ struct CaseParam {
 };
 
 // Readable names in gtest's failure lines (instead of the parameter's bytes).
-void PrintTo(const CaseParam& p, std::ostream* os) { *os << p.backend << " x " << p.case_name; }
+void PrintTo(const CaseParam& p, std::ostream* os) {
+  *os << p.backend << " x " << p.case_name;
+}
 
 std::vector<CaseParam> all_case_params() {
   std::vector<CaseParam> out;
@@ -134,7 +137,8 @@ std::string sanitize(std::string s) {
 
 using Params = std::map<std::string, std::string>;
 
-std::unique_ptr<CompressedTransfer> compress(const std::string& backend, const CaseData& c, const Params& params = {}) {
+std::unique_ptr<CompressedTransfer> compress(const std::string& backend, const CaseData& c,
+                                             const Params& params = {}) {
   auto compressor = CompressorRegistry::instance().create(backend, params);
   auto out = compressor->compress(c.input(), Progress::null());
   PRT_CHECK(out != nullptr, "{} returned no compressed transfer", backend);
@@ -155,24 +159,28 @@ LocalRadiance relight(const CompressedTransfer& ct, const Cubemap& light) {
 }
 
 bool bit_identical(const LocalRadiance& a, const LocalRadiance& b) {
-  return a.basis == b.basis && a.dim == b.dim && a.vertices == b.vertices && a.values.size() == b.values.size() &&
-         (a.values.empty() || std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(Rgb)) == 0);
+  return a.basis == b.basis && a.dim == b.dim && a.vertices == b.vertices &&
+         a.values.size() == b.values.size() &&
+         (a.values.empty() ||
+          std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(Rgb)) == 0);
 }
 
 ::testing::AssertionResult within(const char* what, double error, double tolerance) {
   if (error <= tolerance) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << what << " error " << error << " > tolerance " << tolerance;
+  return ::testing::AssertionFailure()
+         << what << " error " << error << " > tolerance " << tolerance;
 }
 
 ::testing::AssertionResult same_storage(const StorageReport& a, const StorageReport& b) {
   if (a.components.size() != b.components.size())
-    return ::testing::AssertionFailure() << a.components.size() << " vs " << b.components.size() << " components";
+    return ::testing::AssertionFailure()
+           << a.components.size() << " vs " << b.components.size() << " components";
   for (std::size_t i = 0; i < a.components.size(); ++i) {
     const auto &x = a.components[i], &y = b.components[i];
     if (x.name != y.name || x.bytes != y.bytes || x.layout != y.layout)
-      return ::testing::AssertionFailure() << "component " << i << ": " << x.name << " " << x.bytes << " B ("
-                                           << x.layout << ") vs " << y.name << " " << y.bytes << " B (" << y.layout
-                                           << ")";
+      return ::testing::AssertionFailure()
+             << "component " << i << ": " << x.name << " " << x.bytes << " B (" << x.layout
+             << ") vs " << y.name << " " << y.bytes << " B (" << y.layout << ")";
   }
   return ::testing::AssertionSuccess();
 }
@@ -248,8 +256,8 @@ class Conformance : public ::testing::TestWithParam<CaseParam> {
     const auto& p = GetParam();
     data_ = &case_data(p.case_name);
     entry_ = &CompressorRegistry::instance().get(p.backend);
-    trace_ = std::make_unique<::testing::ScopedTrace>(__FILE__, __LINE__,
-                                                      "backend " + p.backend + ", case " + data_->description);
+    trace_ = std::make_unique<::testing::ScopedTrace>(
+        __FILE__, __LINE__, "backend " + p.backend + ", case " + data_->description);
   }
   const CaseData& data() const { return *data_; }
   const CompressorEntry& entry() const { return *entry_; }
@@ -280,7 +288,8 @@ TEST_P(Conformance, RelightMatchesTheExactProductWithinTheDeclaredBound) {
   if (ct.output_basis() != RadianceBasis::kPixel)
     GTEST_SKIP() << "output basis " << to_string(ct.output_basis())
                  << ": comparing with the pixel-basis product needs the conversion at the d_j bins";
-  const double tolerance = bound == 0 ? kLosslessTolerance : bound * (1 + 1e-6) + kLosslessTolerance;
+  const double tolerance =
+      bound == 0 ? kLosslessTolerance : bound * (1 + 1e-6) + kLosslessTolerance;
   for (std::size_t l = 0; l < data().lights.size(); ++l) {
     SCOPED_TRACE(::testing::Message() << "light " << l);
     const LocalRadiance out = relight(ct, data().lights[l]);
@@ -294,14 +303,16 @@ TEST_P(Conformance, RelightMatchesTheExactProductWithinTheDeclaredBound) {
       EXPECT_TRUE(within("max-norm", max_relative_error(out, exact), kLosslessTolerance));
     }
     if (!non_empty()) {
-      for (const Rgb& v : out.values) ASSERT_EQ(v, Rgb(0.f)) << "an all-zero T must relight to exact zeros";
+      for (const Rgb& v : out.values)
+        ASSERT_EQ(v, Rgb(0.f)) << "an all-zero T must relight to exact zeros";
     }
   }
 }
 
 TEST_P(Conformance, OpenClMatchesTheCppReference) {
   ClContext* ctx = default_context();
-  if (ctx == nullptr) GTEST_SKIP() << "no OpenCL device on this machine: the device path is not tested here";
+  if (ctx == nullptr)
+    GTEST_SKIP() << "no OpenCL device on this machine: the device path is not tested here";
   for (const Params& params : device_param_sets(entry())) {
     SCOPED_TRACE("parameters " + describe(params));
     const auto ct = compress(backend(), data(), params);
@@ -322,7 +333,8 @@ TEST_P(Conformance, OpenClMatchesTheCppReference) {
       ASSERT_EQ(gpu.dim, cpp.dim);
       ASSERT_EQ(gpu.vertices, cpp.vertices);
       ASSERT_EQ(gpu.values.size(), cpp.values.size());
-      EXPECT_TRUE(within("OpenCL vs C++ relative L2", relative_l2_error(gpu, cpp), kDeviceTolerance));
+      EXPECT_TRUE(
+          within("OpenCL vs C++ relative L2", relative_l2_error(gpu, cpp), kDeviceTolerance));
       EXPECT_TRUE(within("OpenCL vs C++ max-norm", max_relative_error(gpu, cpp), kDeviceTolerance));
       // The timing path must leave the same result on the device.
       LocalRadiance again;
@@ -346,7 +358,8 @@ TEST_P(Conformance, SaveLoadRoundTripIsIdentical) {
   EXPECT_EQ(loaded->output_basis(), ct.output_basis());
   for (std::size_t l = 0; l < data().lights.size(); ++l) {
     SCOPED_TRACE(::testing::Message() << "light " << l);
-    const LightCoeffs a = ct.project_light(data().lights[l]), b = loaded->project_light(data().lights[l]);
+    const LightCoeffs a = ct.project_light(data().lights[l]),
+                      b = loaded->project_light(data().lights[l]);
     EXPECT_EQ(a.basis, b.basis);
     ASSERT_EQ(a.values.size(), b.values.size());
     EXPECT_EQ(std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(Rgb)), 0)
@@ -355,7 +368,8 @@ TEST_P(Conformance, SaveLoadRoundTripIsIdentical) {
         << "relight differs after save/load";
   }
   save_compressed(*loaded, again.path);
-  EXPECT_TRUE(file_bytes(file.path) == file_bytes(again.path)) << "saving the loaded transfer gives other bytes";
+  EXPECT_TRUE(file_bytes(file.path) == file_bytes(again.path))
+      << "saving the loaded transfer gives other bytes";
 }
 
 TEST_P(Conformance, StorageAndFlopsArePositiveAndMatchTheSavedFile) {
@@ -382,11 +396,13 @@ TEST_P(Conformance, StorageAndFlopsArePositiveAndMatchTheSavedFile) {
   const ArchiveReader archive = ArchiveReader::open(file.path);
   std::uint64_t payload = 0;
   for (const auto& s : archive.sections()) payload += s.bytes;
-  SCOPED_TRACE(::testing::Message() << "storage total " << total << " B, file " << size << " B, section payloads "
-                                    << payload << " B in " << archive.sections().size() << " sections");
-  EXPECT_GE(payload + kFileUnderAllowance, total) << "the report counts bytes the file does not hold";
-  EXPECT_LE(static_cast<double>(size),
-            static_cast<double>(total) * (1 + kFileOverheadRelative) + static_cast<double>(kFileOverheadFixed))
+  SCOPED_TRACE(::testing::Message()
+               << "storage total " << total << " B, file " << size << " B, section payloads "
+               << payload << " B in " << archive.sections().size() << " sections");
+  EXPECT_GE(payload + kFileUnderAllowance, total)
+      << "the report counts bytes the file does not hold";
+  EXPECT_LE(static_cast<double>(size), static_cast<double>(total) * (1 + kFileOverheadRelative) +
+                                           static_cast<double>(kFileOverheadFixed))
       << "the file holds much more than the report counts";
   EXPECT_EQ(archive.meta_value<std::uint64_t>("storage_bytes"), total);
 }
@@ -398,7 +414,8 @@ TEST_P(Conformance, SameSeedGivesBitIdenticalRelight) {
   EXPECT_TRUE(same_storage(a->storage(), b->storage()));
   EXPECT_EQ(a->flops_per_relight(), b->flops_per_relight());
   for (std::size_t l = 0; l < data().lights.size(); ++l)
-    EXPECT_TRUE(bit_identical(relight(*a, data().lights[l]), relight(*b, data().lights[l]))) << "light " << l;
+    EXPECT_TRUE(bit_identical(relight(*a, data().lights[l]), relight(*b, data().lights[l])))
+        << "light " << l;
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(all_case_params()),
@@ -438,8 +455,10 @@ TEST_P(ConformanceParams, RejectsEveryValueOutsideItsRange) {
       if (spec.max) bad.push_back(fmt::format("{}", static_cast<long long>(*spec.max) + 1));
       bad.push_back("not-a-number");
     } else if (spec.type == prt::ParamType::kReal) {
-      if (spec.min) bad.push_back(fmt::format("{}", *spec.min - std::max(1.0, std::abs(*spec.min))));
-      if (spec.max) bad.push_back(fmt::format("{}", *spec.max + std::max(1.0, std::abs(*spec.max))));
+      if (spec.min)
+        bad.push_back(fmt::format("{}", *spec.min - std::max(1.0, std::abs(*spec.min))));
+      if (spec.max)
+        bad.push_back(fmt::format("{}", *spec.max + std::max(1.0, std::abs(*spec.max))));
       bad.push_back("not-a-number");
     } else if (spec.type == prt::ParamType::kString && !spec.choices.empty()) {
       bad.push_back("not-one-of-the-choices");
@@ -448,7 +467,8 @@ TEST_P(ConformanceParams, RejectsEveryValueOutsideItsRange) {
     }
     for (const auto& value : bad) {
       ++checked;
-      EXPECT_THROW(CompressorRegistry::instance().create(GetParam(), {{spec.key, value}}), ParameterError)
+      EXPECT_THROW(CompressorRegistry::instance().create(GetParam(), {{spec.key, value}}),
+                   ParameterError)
           << spec.key << "=" << value << " was accepted";
     }
   }
@@ -456,7 +476,9 @@ TEST_P(ConformanceParams, RejectsEveryValueOutsideItsRange) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, ConformanceParams, ::testing::ValuesIn(backend_names()),
-                         [](const ::testing::TestParamInfo<std::string>& p) { return sanitize(p.param); });
+                         [](const ::testing::TestParamInfo<std::string>& p) {
+                           return sanitize(p.param);
+                         });
 
 // ---- the suite itself ----
 
@@ -484,14 +506,16 @@ TEST(ConformanceSuite, CasesAreWhatTheyClaim) {
   const auto& dense = case_data("random_dense_s3").transfer;
   EXPECT_EQ(dense.row_offsets()[2 * 16], dense.row_offsets()[3 * 16]) << "vertex 2 is empty";
   const auto& scene = case_data("sphere_over_plane").transfer;
-  EXPECT_TRUE(std::any_of(scene.counts().begin(), scene.counts().end(), [](std::uint8_t c) { return c < 4; }));
+  EXPECT_TRUE(std::any_of(scene.counts().begin(), scene.counts().end(),
+                          [](std::uint8_t c) { return c < 4; }));
   EXPECT_EQ(scene.cols(), 6u * 8 * 8);
   EXPECT_EQ(scene.local_count(), 16);
   EXPECT_EQ(case_data("all_zero").transfer.nnz(), 0u);
   EXPECT_GT(case_data("all_zero").transfer.rows(), 0u);
   for (const auto& spec : case_specs())
     for (const auto& light : case_data(spec.name).lights)
-      for (const Rgb& r : light.radiance) ASSERT_TRUE(r.x >= 0 && r.y >= 0 && r.z >= 0) << spec.name;
+      for (const Rgb& r : light.radiance)
+        ASSERT_TRUE(r.x >= 0 && r.y >= 0 && r.z >= 0) << spec.name;
 }
 
 }  // namespace

@@ -46,19 +46,22 @@ struct CaseData {
 /// A random pixel-basis transfer: every (vertex, column) pair is occupied with probability
 /// `density` by one entry in a random local row with a random count in 1..s^2. Vertices listed
 /// in `empty_vertices` get no entry.
-inline TransferMatrix random_transfer(std::uint64_t seed, std::size_t vertices, int grid_side, int resolution,
-                                      int supersampling, double density,
+inline TransferMatrix random_transfer(std::uint64_t seed, std::size_t vertices, int grid_side,
+                                      int resolution, int supersampling, double density,
                                       const std::vector<std::size_t>& empty_vertices = {}) {
   std::mt19937_64 rng(seed);
-  const int m = grid_side * grid_side, n = 6 * resolution * resolution, max_count = supersampling * supersampling;
+  const int m = grid_side * grid_side, n = 6 * resolution * resolution,
+            max_count = supersampling * supersampling;
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int> row_of(0, m - 1), count_of(1, max_count);
   std::vector<std::uint32_t> offsets{0}, columns;
   std::vector<std::uint8_t> counts;
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(static_cast<std::size_t>(m));
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(
+      static_cast<std::size_t>(m));
   for (std::size_t v = 0; v < vertices; ++v) {
     for (auto& r : rows) r.clear();
-    const bool empty = std::find(empty_vertices.begin(), empty_vertices.end(), v) != empty_vertices.end();
+    const bool empty =
+        std::find(empty_vertices.begin(), empty_vertices.end(), v) != empty_vertices.end();
     for (int k = 0; k < n && !empty; ++k) {
       if (u(rng) >= density) continue;
       const int row = row_of(rng);
@@ -73,7 +76,8 @@ inline TransferMatrix random_transfer(std::uint64_t seed, std::size_t vertices, 
       offsets.push_back(static_cast<std::uint32_t>(columns.size()));
     }
   }
-  return TransferMatrix::from_csr(vertices, m, n, supersampling, std::move(offsets), columns, std::move(counts));
+  return TransferMatrix::from_csr(vertices, m, n, supersampling, std::move(offsets), columns,
+                                  std::move(counts));
 }
 
 /// Two lights: uniform random radiance in [0, 1) per channel, and a high-dynamic-range one
@@ -85,7 +89,8 @@ inline std::vector<Cubemap> test_lights(int resolution, std::uint64_t seed) {
   for (auto& r : random.radiance) r = Rgb(u(rng), u(rng), u(rng));
   for (auto& r : hdr.radiance) r = Rgb(0.05f + 0.01f * u(rng), 0.06f, 0.08f);
   std::uniform_int_distribution<std::size_t> pixel(0, hdr.radiance.size() - 1);
-  for (float peak : {500.0f, 120.0f, 35.0f}) hdr.radiance[pixel(rng)] = Rgb(peak, 0.9f * peak, 0.7f * peak);
+  for (float peak : {500.0f, 120.0f, 35.0f})
+    hdr.radiance[pixel(rng)] = Rgb(peak, 0.9f * peak, 0.7f * peak);
   return {std::move(random), std::move(hdr)};
 }
 
@@ -107,25 +112,33 @@ struct CaseSpec {
   std::function<std::unique_ptr<CaseData>()> make;
 };
 
-inline std::unique_ptr<CaseData> make_case(std::string name, std::string description, TransferMatrix t, int resolution,
-                                           int grid_side, std::uint64_t light_seed) {
-  auto c = std::unique_ptr<CaseData>(new CaseData{std::move(name), std::move(description), std::move(t),
-                                                  CubemapLayout(resolution), HemisphereGrid(grid_side), {}});
+inline std::unique_ptr<CaseData> make_case(std::string name, std::string description,
+                                           TransferMatrix t, int resolution, int grid_side,
+                                           std::uint64_t light_seed) {
+  auto c = std::unique_ptr<CaseData>(new CaseData{std::move(name),
+                                                  std::move(description),
+                                                  std::move(t),
+                                                  CubemapLayout(resolution),
+                                                  HemisphereGrid(grid_side),
+                                                  {}});
   c->lights = test_lights(resolution, light_seed);
   return c;
 }
 
 /// A random case: seed, vertices, S (M = S^2), R (N = 6 R^2), s, density, empty vertices.
-inline CaseSpec random_case(std::string name, std::uint64_t seed, std::size_t vertices, int grid_side, int resolution,
-                            int supersampling, double density, std::vector<std::size_t> empty = {}) {
-  return {name, [=] {
-            const std::string description =
-                fmt::format("{}: random_transfer(seed = {}, vertices = {}, S = {}, R = {}, s = {}, density = {})", name,
-                            seed, vertices, grid_side, resolution, supersampling, density);
-            return make_case(name, description,
-                             random_transfer(seed, vertices, grid_side, resolution, supersampling, density, empty),
-                             resolution, grid_side, seed);
-          }};
+inline CaseSpec random_case(std::string name, std::uint64_t seed, std::size_t vertices,
+                            int grid_side, int resolution, int supersampling, double density,
+                            std::vector<std::size_t> empty = {}) {
+  return {
+      name, [=] {
+        const std::string description = fmt::format(
+            "{}: random_transfer(seed = {}, vertices = {}, S = {}, R = {}, s = {}, density = {})",
+            name, seed, vertices, grid_side, resolution, supersampling, density);
+        return make_case(
+            name, description,
+            random_transfer(seed, vertices, grid_side, resolution, supersampling, density, empty),
+            resolution, grid_side, seed);
+      }};
 }
 
 /// Every case, in a fixed order (test names are derived from it).
@@ -139,13 +152,15 @@ inline const std::vector<CaseSpec>& case_specs() {
       {"sphere_over_plane",
        [] {
          return make_case("sphere_over_plane",
-                          "sphere_over_plane: make_sphere(0.5, 12, 6) at (0.2, 0.8, -0.1) over make_plane(3, 3, 4), "
+                          "sphere_over_plane: make_sphere(0.5, 12, 6) at (0.2, 0.8, -0.1) over "
+                          "make_plane(3, 3, 4), "
                           "R = 8, S = 4, s = 2, light seed 61",
                           sphere_over_plane_transfer(), 8, 4, 61);
        }},
       {"all_zero",
        [] {
-         return make_case("all_zero", "all_zero: 5 vertices, S = 2, R = 2, s = 2, nnz = 0, light seed 71",
+         return make_case("all_zero",
+                          "all_zero: 5 vertices, S = 2, R = 2, s = 2, nnz = 0, light seed 71",
                           random_transfer(71, 5, 2, 2, 2, 0.0), 2, 2, 71);
        }},
   };

@@ -3,8 +3,6 @@
 // duplicates and incomplete entries are refused, plugins that are missing or are not prtlab
 // plugins give clear errors, and compressed transfers round-trip through save_compressed /
 // load_compressed with the backend named in the file.
-#include "prtlab/compressor_registry.h"
-
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -16,6 +14,7 @@
 #include <fstream>
 
 #include "prtlab/archive.h"
+#include "prtlab/compressor_registry.h"
 #include "prtlab/error.h"
 #include "prtlab/transfer_matrix.h"
 
@@ -30,7 +29,8 @@ const std::vector<std::string> kBuiltinBackends = {"uncompressed"};
 
 class ScratchDir {
  public:
-  ScratchDir() : path_(fs::temp_directory_path() / ("prtlab_registry_test_" + std::to_string(::getpid()))) {
+  ScratchDir()
+      : path_(fs::temp_directory_path() / ("prtlab_registry_test_" + std::to_string(::getpid()))) {
     fs::create_directories(path_);
   }
   ~ScratchDir() {
@@ -52,7 +52,9 @@ std::string message_of(const std::function<void()>& f) {
   return "(no exception)";
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 CompressorEntry dummy_entry(std::string name) {
   CompressorEntry e;
@@ -149,11 +151,12 @@ TEST(Plugins, MissingFileIsAClearError) {
 // entry point.
 fs::path libm_path() {
   Dl_info info{};
-  if (::dladdr(reinterpret_cast<void*>(static_cast<double (*)(double)>(&::erfc)), &info) != 0 && info.dli_fname &&
-      contains(info.dli_fname, "libm"))
+  if (::dladdr(reinterpret_cast<void*>(static_cast<double (*)(double)>(&::erfc)), &info) != 0 &&
+      info.dli_fname && contains(info.dli_fname, "libm"))
     return info.dli_fname;
-  for (const char* p : {"/lib/x86_64-linux-gnu/libm.so.6", "/usr/lib/x86_64-linux-gnu/libm.so.6",
-                        "/lib/aarch64-linux-gnu/libm.so.6", "/lib64/libm.so.6", "/usr/lib64/libm.so.6"})
+  for (const char* p :
+       {"/lib/x86_64-linux-gnu/libm.so.6", "/usr/lib/x86_64-linux-gnu/libm.so.6",
+        "/lib/aarch64-linux-gnu/libm.so.6", "/lib64/libm.so.6", "/usr/lib64/libm.so.6"})
     if (fs::exists(p)) return p;
   return {};
 }
@@ -191,8 +194,9 @@ TEST(CompressedFiles, SaveLoadRoundTripThroughTheRegistry) {
   const TransferMatrix t = small_transfer();
   const CubemapLayout cubemap(2);
   const HemisphereGrid grid(2);
-  const auto compressed =
-      CompressorRegistry::instance().create("uncompressed", {})->compress({t, nullptr, cubemap, grid}, Progress::null());
+  const auto compressed = CompressorRegistry::instance()
+                              .create("uncompressed", {})
+                              ->compress({t, nullptr, cubemap, grid}, Progress::null());
   const fs::path file = dir.path() / "t.prt";
   save_compressed(*compressed, file);
 
@@ -200,7 +204,8 @@ TEST(CompressedFiles, SaveLoadRoundTripThroughTheRegistry) {
   EXPECT_EQ(archive.kind(), "compressed-transfer");
   EXPECT_EQ(archive.meta_value<std::string>("backend"), "uncompressed");
   EXPECT_EQ(archive.meta_value<double>("flops_per_relight"), 2.0 * t.nnz());
-  EXPECT_EQ(archive.meta_value<std::uint64_t>("storage_bytes"), compressed->storage().total_bytes());
+  EXPECT_EQ(archive.meta_value<std::uint64_t>("storage_bytes"),
+            compressed->storage().total_bytes());
 
   const auto loaded = load_compressed(file);
   ASSERT_NE(loaded, nullptr);
@@ -259,8 +264,9 @@ TEST(CompressedFiles, OtherArtifactKindsAndDamagedFilesAreRefused) {
   const CubemapLayout cubemap(2);
   const HemisphereGrid grid(2);
   const fs::path file = dir.path() / "t.prt";
-  save_compressed(*CompressorRegistry::instance().create("uncompressed", {})->compress({t, nullptr, cubemap, grid},
-                                                                                       Progress::null()),
+  save_compressed(*CompressorRegistry::instance()
+                       .create("uncompressed", {})
+                       ->compress({t, nullptr, cubemap, grid}, Progress::null()),
                   file);
   {
     std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);

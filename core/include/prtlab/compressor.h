@@ -87,7 +87,8 @@ class CompressedTransfer {
   /// C++ reference relight: out = T~ L (resized as needed).
   virtual void relight(const LightCoeffs& light, LocalRadiance& out) const = 0;
   /// OpenCL relight; a backend without a kernel returns nullptr (the conformance suite
-  /// reports that as a failure for registered backends).
+  /// reports that as a failure for registered backends). The relighter may keep a reference
+  /// to `context`, which must outlive it.
   virtual std::unique_ptr<DeviceRelighter> upload(ClContext& context) const = 0;
 
   /// Serialise the backend's state (the registry writes the header and backend name).

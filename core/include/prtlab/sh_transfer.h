@@ -86,9 +86,9 @@ class ShTransferIntegrator {
  private:
   const SupersampledCubemap* dirs_;
   int order_;
-  std::vector<double> table_;    ///< subray_count x n: y_k(d_r) sqrt(dOmega_r)
-  std::vector<Vec3d> samples_;   ///< P fixed directions for solving R
-  std::vector<double> pinv_;     ///< n x P row-major: pseudo-inverse of [y(samples)] (P x n)
+  std::vector<double> table_;   ///< subray_count x n: y_k(d_r) sqrt(dOmega_r)
+  std::vector<Vec3d> samples_;  ///< P fixed directions for solving R
+  std::vector<double> pinv_;    ///< n x P row-major: pseudo-inverse of [y(samples)] (P x n)
 };
 
 }  // namespace prt
