@@ -52,6 +52,7 @@
 #include "prtlab/content_hash.h"
 #include "prtlab/data_paths.h"
 #include "prtlab/exact_relight.h"
+#include "prtlab/random_transfer.h"
 #include "prtlab/scene.h"
 #include "prtlab/scene_transfer.h"
 #include "prtlab/stage_cache.h"
@@ -78,28 +79,13 @@ struct Workload {
 // Same shape as the bunny: 3,286 vertices x M = 64 rows, N = 6,144, about 2,650 visible pixels
 // per vertex (one non-zero per column per vertex block), counts 1..4.
 prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
-  const std::size_t vertices = 3286;
-  const int m = 64, n = 6144;
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::uniform_int_distribution<int> row_of(0, m - 1), count_of(1, 4);
-  std::vector<std::uint32_t> offsets{0}, cols;
-  std::vector<std::uint8_t> counts;
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(m);
-  for (std::size_t v = 0; v < vertices; ++v) {
-    for (auto& r : rows) r.clear();
-    for (int k = 0; k < n; ++k)
-      if (u(rng) < 2650.0 / n)
-        rows[row_of(rng)].push_back({static_cast<std::uint32_t>(k), count_of(rng)});
-    for (const auto& r : rows) {
-      for (const auto& [c, x] : r) {
-        cols.push_back(c);
-        counts.push_back(x);
-      }
-      offsets.push_back(static_cast<std::uint32_t>(cols.size()));
-    }
-  }
-  return prt::TransferMatrix::from_csr(vertices, m, n, 2, std::move(offsets), cols,
-                                       std::move(counts));
+  prt::RandomTransferSpec spec;
+  spec.vertices = 3286;
+  spec.grid_side = 8;
+  spec.resolution = 32;
+  spec.supersampling = 2;
+  spec.density = 2650.0 / 6144.0;
+  return prt::random_transfer(rng(), spec);
 }
 
 Workload make_workload() {

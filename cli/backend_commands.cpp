@@ -28,7 +28,9 @@ struct CompressCli {
 };
 
 nlohmann::json spec_json(const ParamSpec& s) {
-  nlohmann::json j{{"key", s.key}, {"type", std::string(to_string(s.type))}, {"default", s.default_value},
+  nlohmann::json j{{"key", s.key},
+                   {"type", std::string(to_string(s.type))},
+                   {"default", s.default_value},
                    {"doc", s.doc}};
   if (s.min) j["min"] = *s.min;
   if (s.max) j["max"] = *s.max;
@@ -57,16 +59,17 @@ void run_list(const ListCli& o) {
   }
   for (const auto& name : reg.names()) {
     const auto& e = reg.get(name);
-    std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "", e.description.c_str());
+    std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "",
+                e.description.c_str());
     if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
     for (const auto& s : e.params)
-      std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(), std::string(to_string(s.type)).c_str(),
-                  s.default_value.c_str(), s.doc.c_str());
+      std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
+                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
   }
   std::printf("shared parameters:\n");
   for (const auto& s : shared_param_specs())
-    std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(), std::string(to_string(s.type)).c_str(),
-                s.default_value.c_str(), s.doc.c_str());
+    std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
 }
 
 }  // namespace
@@ -94,12 +97,13 @@ void run_compress(const CompressCli& o) {
   const CubemapLayout layout(desc.cubemap_resolution);
   const HemisphereGrid grid(desc.local_grid);
   const TransferInput input{t, st.result.sh ? &*st.result.sh : nullptr, layout, grid};
-  const CompressionResult cr = compress_cached(o.backend, params, input, st.key, cache,
-                                               o.force ? CacheMode::kRefresh : CacheMode::kUse,
-                                               !global_options().quiet);
+  const CompressionResult cr =
+      compress_cached(o.backend, params, input, st.key, cache,
+                      o.force ? CacheMode::kRefresh : CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
   const auto lights = evaluation_lights(desc.cubemap_resolution, o.lights);
-  const BackendEvaluation ev = evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat);
+  const BackendEvaluation ev =
+      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat);
   if (!o.save.empty()) save_compressed(*cr.compressed, o.save);
 
   const StorageReport storage = cr.compressed->storage();
@@ -114,23 +118,28 @@ void run_compress(const CompressCli& o) {
     j["compress_seconds"] = cr.compress_seconds;
     j["storage_bytes"] = storage.total_bytes();
     nlohmann::json comps = nlohmann::json::array();
-    for (const auto& c : storage.components) comps.push_back({{"name", c.name}, {"bytes", c.bytes}, {"layout", c.layout}});
+    for (const auto& c : storage.components)
+      comps.push_back({{"name", c.name}, {"bytes", c.bytes}, {"layout", c.layout}});
     j["storage"] = comps;
     j["mflops_per_relight"] = mflops;
     j["exact_mflops_per_relight"] = exact_mflops;
     j["computation_percent"] = 100.0 * mflops / exact_mflops;
     j["dense_bytes"] = t.dense_bytes();
-    j["data_percent"] = 100.0 * static_cast<double>(storage.total_bytes()) / static_cast<double>(t.dense_bytes());
+    j["data_percent"] =
+        100.0 * static_cast<double>(storage.total_bytes()) / static_cast<double>(t.dense_bytes());
     j["declared_error_bound"] = cr.compressed->declared_error_bound();
     j["rel_l2_error_mean"] = ev.mean_rel_l2;
     j["rel_l2_error_max"] = ev.max_rel_l2;
     nlohmann::json per = nlohmann::json::array();
-    for (const auto& e : ev.errors) per.push_back({{"light", e.light}, {"rel_l2", e.rel_l2}, {"max_rel", e.max_rel}});
+    for (const auto& e : ev.errors)
+      per.push_back({{"light", e.light}, {"rel_l2", e.rel_l2}, {"max_rel", e.max_rel}});
     j["errors"] = per;
     j["ms_per_relight_cpp"] = ev.ms_cpp;
     j["ms_project_light"] = ev.ms_project;
-    j["ms_per_relight_opencl"] = ev.ms_opencl ? nlohmann::json(*ev.ms_opencl) : nlohmann::json(nullptr);
-    j["opencl_vs_cpp_rel_l2"] = ev.opencl_vs_cpp ? nlohmann::json(*ev.opencl_vs_cpp) : nlohmann::json(nullptr);
+    j["ms_per_relight_opencl"] =
+        ev.ms_opencl ? nlohmann::json(*ev.ms_opencl) : nlohmann::json(nullptr);
+    j["opencl_vs_cpp_rel_l2"] =
+        ev.opencl_vs_cpp ? nlohmann::json(*ev.opencl_vs_cpp) : nlohmann::json(nullptr);
     j["device"] = ctx ? nlohmann::json(ctx->info()) : nlohmann::json(nullptr);
     print_json(std::move(j));
     return;
@@ -139,17 +148,20 @@ void run_compress(const CompressCli& o) {
               cr.cache_hit ? "  (compressed result from cache)" : "");
   for (const auto& [k, v] : cr.params) std::printf("  %s = %s\n", k.c_str(), v.c_str());
   std::printf("compress         %.2f s\n", cr.compress_seconds);
-  std::printf("storage          %.2f MB (%.3f %% of the dense %.0f MB)\n", storage.total_bytes() / 1e6,
-              100.0 * storage.total_bytes() / static_cast<double>(t.dense_bytes()), t.dense_bytes() / 1e6);
+  std::printf(
+      "storage          %.2f MB (%.3f %% of the dense %.0f MB)\n", storage.total_bytes() / 1e6,
+      100.0 * storage.total_bytes() / static_cast<double>(t.dense_bytes()), t.dense_bytes() / 1e6);
   for (const auto& c : storage.components)
     std::printf("    %-14s %10.2f MB  %s\n", c.name.c_str(), c.bytes / 1e6, c.layout.c_str());
-  std::printf("MFLOPs/relight   %.2f (exact %.2f: %.1f %%)\n", mflops, exact_mflops, 100.0 * mflops / exact_mflops);
-  std::printf("error            rel. L2 mean %.3e, max %.3e over %zu lights (declared bound %.3g)\n", ev.mean_rel_l2,
-              ev.max_rel_l2, ev.errors.size(), cr.compressed->declared_error_bound());
+  std::printf("MFLOPs/relight   %.2f (exact %.2f: %.1f %%)\n", mflops, exact_mflops,
+              100.0 * mflops / exact_mflops);
+  std::printf(
+      "error            rel. L2 mean %.3e, max %.3e over %zu lights (declared bound %.3g)\n",
+      ev.mean_rel_l2, ev.max_rel_l2, ev.errors.size(), cr.compressed->declared_error_bound());
   std::printf("relight C++      %.3f ms (+ %.3f ms light projection)\n", ev.ms_cpp, ev.ms_project);
   if (ev.ms_opencl)
-    std::printf("relight OpenCL   %.3f ms kernel on %s (vs C++: %.2e rel. L2)\n", *ev.ms_opencl, ev.device.c_str(),
-                ev.opencl_vs_cpp.value_or(0));
+    std::printf("relight OpenCL   %.3f ms kernel on %s (vs C++: %.2e rel. L2)\n", *ev.ms_opencl,
+                ev.device.c_str(), ev.opencl_vs_cpp.value_or(0));
   else
     std::printf("relight OpenCL   n/a (%s)\n", ctx ? "backend has no kernel" : "no OpenCL device");
   if (!o.save.empty()) std::printf("saved            %s\n", o.save.c_str());
@@ -159,17 +171,21 @@ void run_compress(const CompressCli& o) {
 
 void add_backend_commands(CLI::App& app) {
   auto lo = std::make_shared<ListCli>();
-  auto* l = app.add_subcommand("list", "List the registered compressor backends and their parameters");
+  auto* l =
+      app.add_subcommand("list", "List the registered compressor backends and their parameters");
   l->add_flag("--json", lo->json, "Machine-readable output (docs/cli.md)");
   l->callback([lo] { run_list(*lo); });
 
   auto co = std::make_shared<CompressCli>();
-  auto* c = app.add_subcommand("compress", "Compress a scene's transfer with a backend and measure it");
+  auto* c =
+      app.add_subcommand("compress", "Compress a scene's transfer with a backend and measure it");
   c->add_option("scene", co->scene, "Scene name or .toml path")->required();
   c->add_option("--backend,-b", co->backend, "Backend name (prtlab list)")->required();
   c->add_option("--param,-p", co->params, "Backend parameter key=value (repeatable)");
-  c->add_option("--lights", co->lights, "Number of evaluation environments (1-8)")->check(CLI::Range(1, 8));
-  c->add_option("--repeat", co->repeat, "Timed relights (median reported)")->check(CLI::Range(1, 100000));
+  c->add_option("--lights", co->lights, "Number of evaluation environments (1-8)")
+      ->check(CLI::Range(1, 8));
+  c->add_option("--repeat", co->repeat, "Timed relights (median reported)")
+      ->check(CLI::Range(1, 100000));
   c->add_option("--save", co->save, "Also write the compressed transfer to this file");
   c->add_flag("--force", co->force, "Recompress even when the stage cache has the result");
   c->add_flag("--json", co->json, "Machine-readable output (docs/cli.md)");

@@ -4,7 +4,6 @@
 // bad input and main() prints it.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
-
 #include <optional>
 #include <string>
 

@@ -29,8 +29,12 @@ nlohmann::json provenance() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   char iso[32];
   std::strftime(iso, sizeof(iso), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  return {{"version", b.version}, {"git", b.git_hash},     {"build", b.build_type},
-          {"compiler", b.compiler}, {"machine", machine_description()}, {"time_utc", iso},
+  return {{"version", b.version},
+          {"git", b.git_hash},
+          {"build", b.build_type},
+          {"compiler", b.compiler},
+          {"machine", machine_description()},
+          {"time_utc", iso},
           {"command", g_command_line}};
 }
 

@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
   app.add_option("--device", g.device,
                  "OpenCL device: gpu, cpu, pocl, nvidia, P:D (platform:device) or a name substring "
                  "(default: $PRTLAB_DEVICE, else the first GPU, else PoCL's CPU device)");
-  app.add_flag("--strict-device", g.strict_device, "Fail instead of falling back when the device is not found");
+  app.add_flag("--strict-device", g.strict_device,
+               "Fail instead of falling back when the device is not found");
   app.add_flag("--no-opencl", g.no_opencl, "Run the C++ reference paths only");
   std::vector<std::string> plugins;
   app.add_option("--plugin", plugins,

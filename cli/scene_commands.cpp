@@ -67,26 +67,29 @@ void run_scene_info(const SceneInfoOptions& o) {
   std::printf("scene        %s (%s)\n", d.name.c_str(), file.string().c_str());
   if (!d.description.empty()) std::printf("             %s\n", d.description.c_str());
   std::printf("vertices     %zu\ntriangles    %zu\n", mesh.vertex_count(), mesh.triangle_count());
-  std::printf("bounds       [%.4g %.4g %.4g] .. [%.4g %.4g %.4g]\n", box.lo.x, box.lo.y, box.lo.z, box.hi.x,
-              box.hi.y, box.hi.z);
-  std::printf("local grid   S = %d (M = %d)\ncubemap      R = %d (N = %d)\nsupersample  s = %d\n", d.local_grid, m,
-              d.cubemap_resolution, n, d.supersampling);
+  std::printf("bounds       [%.4g %.4g %.4g] .. [%.4g %.4g %.4g]\n", box.lo.x, box.lo.y, box.lo.z,
+              box.hi.x, box.hi.y, box.hi.z);
+  std::printf("local grid   S = %d (M = %d)\ncubemap      R = %d (N = %d)\nsupersample  s = %d\n",
+              d.local_grid, m, d.cubemap_resolution, n, d.supersampling);
   std::printf("parts        %zu\n", d.parts.size());
   for (std::size_t i = 0; i < d.parts.size(); ++i)
-    std::printf("  %-12s %-28s btf %-10s %7zu verts %7zu tris\n", d.parts[i].name.c_str(), d.parts[i].mesh.c_str(),
-                d.parts[i].btf.c_str(), part_verts[i], part_tris[i]);
+    std::printf("  %-12s %-28s btf %-10s %7zu verts %7zu tris\n", d.parts[i].name.c_str(),
+                d.parts[i].mesh.c_str(), d.parts[i].btf.c_str(), part_verts[i], part_tris[i]);
   std::printf("built in     %.2f s\n", secs);
 }
 
 }  // namespace
 
 void add_scene_commands(CLI::App& app) {
-  auto* scene = app.add_subcommand("scene", "Scene files: inspect scenes (see scenes/ and docs/scenes.md)");
+  auto* scene =
+      app.add_subcommand("scene", "Scene files: inspect scenes (see scenes/ and docs/scenes.md)");
   scene->require_subcommand(1);
 
   auto opts = std::make_shared<SceneInfoOptions>();
-  auto* info = scene->add_subcommand("info", "Build a scene's mesh and print vertices, triangles, parts, bounds");
-  info->add_option("scene", opts->scene, "Scene name (scenes/<name>.toml) or path to a .toml file")->required();
+  auto* info = scene->add_subcommand(
+      "info", "Build a scene's mesh and print vertices, triangles, parts, bounds");
+  info->add_option("scene", opts->scene, "Scene name (scenes/<name>.toml) or path to a .toml file")
+      ->required();
   info->add_flag("--json", opts->json, "Machine-readable output (keys documented in docs/cli.md)");
   info->callback([opts] { run_scene_info(*opts); });
 }

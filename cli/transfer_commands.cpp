@@ -23,12 +23,9 @@ struct PaperRow {
   double mflops;
   double data_mb;
 };
-constexpr PaperRow kPaper[] = {{"bunny", 10.6, 21.2, 1400},
-                               {"armor", 21.9, 43.9, 9500},
-                               {"chair", 40.5, 81.0, 6300},
-                               {"temple", 62.8, 125.6, 12600},
-                               {"bunny-12k", 39.2, 78.4, 0},
-                               {"bunny-48k", 151.3, 302.6, 0}};
+constexpr PaperRow kPaper[] = {{"bunny", 10.6, 21.2, 1400},  {"armor", 21.9, 43.9, 9500},
+                               {"chair", 40.5, 81.0, 6300},  {"temple", 62.8, 125.6, 12600},
+                               {"bunny-12k", 39.2, 78.4, 0}, {"bunny-48k", 151.3, 302.6, 0}};
 const PaperRow* paper_row(const std::string& scene) {
   for (const auto& r : kPaper)
     if (scene == r.scene) return &r;
@@ -53,8 +50,9 @@ struct RelightCli {
   std::vector<std::string> params;
 };
 
-void write_local_radiance(const LocalRadiance& out, const std::string& file, const std::string& scene,
-                          const std::string& env, const std::string& backend) {
+void write_local_radiance(const LocalRadiance& out, const std::string& file,
+                          const std::string& scene, const std::string& env,
+                          const std::string& backend) {
   ArchiveWriter w("local-radiance", 1);
   w.add_meta("scene", scene);
   w.add_meta("env", env);
@@ -77,8 +75,8 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc, const Scene
   const HemisphereGrid grid(desc.local_grid);
   const TransferInput input{t, st.result.sh ? &*st.result.sh : nullptr, layout, grid};
   StageCache cache;
-  const auto cr = compress_cached(o.backend, ParamSet::parse_assignments(o.params), input, st.key, cache,
-                                  CacheMode::kUse, !global_options().quiet);
+  const auto cr = compress_cached(o.backend, ParamSet::parse_assignments(o.params), input, st.key,
+                                  cache, CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
   std::vector<EvaluationLight> lights;
   lights.push_back({env_file.stem().string(), std::move(cube)});
@@ -97,19 +95,22 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc, const Scene
     j["repeat"] = o.repeat;
     j["ms_per_relight"] = ev.ms_cpp;
     j["ms_project_light"] = ev.ms_project;
-    j["ms_per_relight_opencl"] = ev.ms_opencl ? nlohmann::json(*ev.ms_opencl) : nlohmann::json(nullptr);
-    j["opencl_vs_cpp_rel_l2"] = ev.opencl_vs_cpp ? nlohmann::json(*ev.opencl_vs_cpp) : nlohmann::json(nullptr);
+    j["ms_per_relight_opencl"] =
+        ev.ms_opencl ? nlohmann::json(*ev.ms_opencl) : nlohmann::json(nullptr);
+    j["opencl_vs_cpp_rel_l2"] =
+        ev.opencl_vs_cpp ? nlohmann::json(*ev.opencl_vs_cpp) : nlohmann::json(nullptr);
     j["rel_l2_error"] = ev.errors.front().rel_l2;
     j["device"] = ctx ? nlohmann::json(ctx->info()) : nlohmann::json(nullptr);
     j["output"] = o.out;
     print_json(std::move(j));
     return;
   }
-  std::printf("scene          %s, env %s, backend %s\n", desc.name.c_str(), env_file.filename().string().c_str(),
-              o.backend.c_str());
-  std::printf("relight C++    %.3f ms (+ %.3f ms light projection), median of %d\n", ev.ms_cpp, ev.ms_project,
-              o.repeat);
-  if (ev.ms_opencl) std::printf("relight OpenCL %.3f ms kernel on %s\n", *ev.ms_opencl, ev.device.c_str());
+  std::printf("scene          %s, env %s, backend %s\n", desc.name.c_str(),
+              env_file.filename().string().c_str(), o.backend.c_str());
+  std::printf("relight C++    %.3f ms (+ %.3f ms light projection), median of %d\n", ev.ms_cpp,
+              ev.ms_project, o.repeat);
+  if (ev.ms_opencl)
+    std::printf("relight OpenCL %.3f ms kernel on %s\n", *ev.ms_opencl, ev.device.c_str());
   std::printf("error          %.3e relative L2 vs the exact product\n", ev.errors.front().rel_l2);
   if (!o.out.empty()) std::printf("wrote          %s\n", o.out.c_str());
 }
@@ -167,7 +168,9 @@ void run_precompute(const PrecomputeCli& o) {
                            {"thread_seconds_bin", s.thread_seconds_bin},
                            {"thread_seconds_sh", s.thread_seconds_sh}};
     if (paper)
-      j["paper"] = {{"nnz_millions", paper->nnz_millions}, {"mflops", paper->mflops}, {"dense_mb", paper->data_mb}};
+      j["paper"] = {{"nnz_millions", paper->nnz_millions},
+                    {"mflops", paper->mflops},
+                    {"dense_mb", paper->data_mb}};
     j["parameters"] = {{"local_grid", desc.local_grid},
                        {"cubemap_resolution", desc.cubemap_resolution},
                        {"supersampling", desc.supersampling}};
@@ -181,13 +184,17 @@ void run_precompute(const PrecomputeCli& o) {
               paper ? fmt::format("   (paper: {:.1f} M)", paper->nnz_millions).c_str() : "");
   std::printf("MFLOPs/relight   %.1f\n", mflops);
   std::printf("dense data       %.0f MB%s\n", dense_mb,
-              paper && paper->data_mb > 0 ? fmt::format("   (paper: {:.0f} MB)", paper->data_mb).c_str() : "");
+              paper && paper->data_mb > 0
+                  ? fmt::format("   (paper: {:.0f} MB)", paper->data_mb).c_str()
+                  : "");
   std::printf("stored           %.1f MB (CSR: u32 offsets, u16 columns, u8 counts)\n", stored_mb);
-  std::printf("precompute       %.2f s (%s: %.2f s setup, %.2f s rays+binning, %.2f s assemble)\n", s.seconds_total,
-              st.cache_hit ? "cached result" : "this run", s.seconds_setup, s.seconds_points, s.seconds_assemble);
+  std::printf("precompute       %.2f s (%s: %.2f s setup, %.2f s rays+binning, %.2f s assemble)\n",
+              s.seconds_total, st.cache_hit ? "cached result" : "this run", s.seconds_setup,
+              s.seconds_points, s.seconds_assemble);
   std::printf("rays             %.1f M traced, %.1f M rays/s on %d threads\n", s.rays_traced / 1e6,
               s.rays_per_second() / 1e6, s.threads);
-  std::printf("this run         %.2f s%s\n", st.seconds, st.cache_hit ? " (loaded from cache)" : "");
+  std::printf("this run         %.2f s%s\n", st.seconds,
+              st.cache_hit ? " (loaded from cache)" : "");
 }
 
 void run_relight(const RelightCli& o) {
@@ -205,7 +212,8 @@ void run_relight(const RelightCli& o) {
     for (int i = 0; i < std::max(1, o.repeat); ++i) {
       const auto t0 = std::chrono::steady_clock::now();
       fn();
-      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
     return median(ms);
   };
@@ -247,9 +255,11 @@ void run_relight(const RelightCli& o) {
     print_json(std::move(j));
     return;
   }
-  std::printf("scene          %s, env %s\n", desc.name.c_str(), env_file.filename().string().c_str());
+  std::printf("scene          %s, env %s\n", desc.name.c_str(),
+              env_file.filename().string().c_str());
   std::printf("T              %zu x %zu, nnz %.2f M\n", t.rows(), t.cols(), t.nnz() / 1e6);
-  std::printf("relight        %.3f ms (all threads), %.3f ms (one thread), median of %d\n", ms_all, ms_one, o.repeat);
+  std::printf("relight        %.3f ms (all threads), %.3f ms (one thread), median of %d\n", ms_all,
+              ms_one, o.repeat);
   if (o.eigen) std::printf("eigen sparse   %.3f ms  (ratio %.2fx)\n", ms_eigen, ms_eigen / ms_all);
   std::printf("float error    %.2e relative L2 vs double accumulation\n", float_error);
   if (!o.out.empty()) std::printf("wrote          %s\n", o.out.c_str());
@@ -259,23 +269,29 @@ void run_relight(const RelightCli& o) {
 
 void add_transfer_commands(CLI::App& app) {
   auto pre = std::make_shared<PrecomputeCli>();
-  auto* p = app.add_subcommand("precompute", "Compute (or load from the stage cache) the exact transfer matrix T");
+  auto* p = app.add_subcommand(
+      "precompute", "Compute (or load from the stage cache) the exact transfer matrix T");
   p->add_option("scene", pre->scene, "Scene name or .toml path")->required();
   p->add_flag("--json", pre->json, "Machine-readable output (docs/cli.md)");
   p->add_flag("--force", pre->force, "Recompute even when the stage cache has T");
-  p->add_option("--sh-order", pre->sh_order, "Also compute the SH transfer of this order (n = order^2; 0: none)")
+  p->add_option("--sh-order", pre->sh_order,
+                "Also compute the SH transfer of this order (n = order^2; 0: none)")
       ->check(CLI::Range(0, 10));
   p->callback([pre] { run_precompute(*pre); });
 
   auto rel = std::make_shared<RelightCli>();
   auto* r = app.add_subcommand("relight", "Exact relight L* = T L under an environment map, timed");
   r->add_option("scene", rel->scene, "Scene name or .toml path")->required();
-  r->add_option("--env", rel->env, "Environment map: a lat-long EXR path or a name (courtyard, ...)")->required();
+  r->add_option("--env", rel->env,
+                "Environment map: a lat-long EXR path or a name (courtyard, ...)")
+      ->required();
   r->add_option("--out", rel->out, "Write L* as a prtlab archive (kind local-radiance)");
-  r->add_option("--repeat", rel->repeat, "Timed repetitions (median reported)")->check(CLI::Range(1, 100000));
+  r->add_option("--repeat", rel->repeat, "Timed repetitions (median reported)")
+      ->check(CLI::Range(1, 100000));
   r->add_flag("--json", rel->json, "Machine-readable output (docs/cli.md)");
   r->add_flag("!--no-eigen", rel->eigen, "Skip the Eigen sparse baseline");
-  r->add_option("--backend,-b", rel->backend, "Relight with this backend's compressed transfer (default: exact T)");
+  r->add_option("--backend,-b", rel->backend,
+                "Relight with this backend's compressed transfer (default: exact T)");
   r->add_option("--param,-p", rel->params, "Backend parameter key=value (repeatable)");
   r->callback([rel] { run_relight(*rel); });
 }

@@ -2,5 +2,7 @@
 // themselves with PRT_REGISTER_COMPRESSOR; this file only gives the library a translation unit
 // of its own so that it exists while no backend folder does.
 namespace prt::compressors {
-int builtin_compressor_library_anchor() { return 0; }
+int builtin_compressor_library_anchor() {
+  return 0;
+}
 }  // namespace prt::compressors

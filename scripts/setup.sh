@@ -60,7 +60,7 @@ if [[ $want_data -eq 1 ]]; then
   for e in "${ENVS[@]}"; do [[ -s "$DATA/envmaps/$e.exr" ]] || need_envs=1; done
 
   work=""
-  cleanup() { [[ -n "$work" ]] && rm -rf "$work"; }
+  cleanup() { if [[ -n "$work" ]]; then rm -rf "$work"; fi; }
   trap cleanup EXIT
 
   if [[ $need_meshes -eq 1 || $need_envs -eq 1 ]]; then

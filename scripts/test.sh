@@ -10,11 +10,12 @@ PRESET="${PRESET:-release}"
 JOBS="${JOBS:-$(nproc)}"
 
 bash scripts/setup.sh
+mkdir -p build
 
 if command -v ccache >/dev/null 2>&1 && [[ -z "${PRTLAB_COMPILER_LAUNCHER:-}" ]]; then
   export PRTLAB_COMPILER_LAUNCHER=ccache
 fi
-cmake --preset "$PRESET" >/dev/null
+cmake --preset "$PRESET" > "build/configure-$PRESET.log" 2>&1 || { cat "build/configure-$PRESET.log"; exit 1; }
 cmake --build --preset "$PRESET" -j "$JOBS"
 
 # Tests never touch the user's caches: PoCL's kernel cache and prtlab's stage cache live in the build tree.

@@ -25,7 +25,9 @@ void write_file_atomically(const std::filesystem::path& path,
     write(tmp);
     std::error_code ec;
     fs::rename(tmp, path, ec);
-    if (ec) throw InputError(path, fmt::format("cannot move the finished file into place: {}", ec.message()));
+    if (ec)
+      throw InputError(path,
+                       fmt::format("cannot move the finished file into place: {}", ec.message()));
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
@@ -37,7 +39,8 @@ void write_bytes_atomically(const std::filesystem::path& path, std::span<const s
   write_file_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw InputError(tmp, "cannot open for writing");
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
     out.close();
     if (!out) throw InputError(path, "write failed (disk full?)");
   });

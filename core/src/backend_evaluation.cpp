@@ -30,23 +30,27 @@ LocalRadiance exact_double(const TransferMatrix& t, const Cubemap& radiance) {
 }  // namespace
 
 std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
-  static const char* kWorlds[] = {"courtyard", "city", "forest", "interior", "night", "studio", "sunrise", "sunset"};
+  static const char* kWorlds[] = {"courtyard", "city",   "forest",  "interior",
+                                  "night",     "studio", "sunrise", "sunset"};
   std::vector<EvaluationLight> out;
   const auto dir = data_dir() / "envmaps";
   bool have_all = true;
-  for (const char* w : kWorlds) have_all = have_all && std::filesystem::exists(dir / (std::string(w) + ".exr"));
+  for (const char* w : kWorlds)
+    have_all = have_all && std::filesystem::exists(dir / (std::string(w) + ".exr"));
   const int count = limit > 0 ? std::min(limit, 8) : 8;
   if (have_all) {
     const LogLevel saved = log_level();
     set_log_level(LogLevel::kError);  // the Blender maps carry a few tiny negative texels each
     for (int i = 0; i < count; ++i)
-      out.push_back({kWorlds[i], resample_to_cubemap(load_latlong_exr(dir / (std::string(kWorlds[i]) + ".exr")),
-                                                     resolution)});
+      out.push_back({kWorlds[i],
+                     resample_to_cubemap(load_latlong_exr(dir / (std::string(kWorlds[i]) + ".exr")),
+                                         resolution)});
     set_log_level(saved);
     return out;
   }
-  log_warn("data cache has no Blender world maps; evaluating with procedural sun-and-sky lights "
-           "(run scripts/setup.sh --data for the real ones)");
+  log_warn(
+      "data cache has no Blender world maps; evaluating with procedural sun-and-sky lights "
+      "(run scripts/setup.sh --data for the real ones)");
   for (int i = 0; i < count; ++i) {
     SunSky s;
     const double a = 0.7 + 0.8 * i;
@@ -57,13 +61,15 @@ std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
 }
 
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
-                                   const std::vector<EvaluationLight>& lights, ClContext* context, int repeats) {
+                                   const std::vector<EvaluationLight>& lights, ClContext* context,
+                                   int repeats) {
   BackendEvaluation ev;
   PRT_CHECK(!lights.empty(), "no evaluation lights");
   if (ct.output_basis() != RadianceBasis::kPixel)
-    throw Error(fmt::format("backend '{}' produces {} radiance; evaluation against the pixel-basis product needs a "
-                            "conversion to the local cells (not available yet)",
-                            ct.backend(), to_string(ct.output_basis())));
+    throw Error(fmt::format(
+        "backend '{}' produces {} radiance; evaluation against the pixel-basis product needs a "
+        "conversion to the local cells (not available yet)",
+        ct.backend(), to_string(ct.output_basis())));
   LocalRadiance out;
   for (const auto& light : lights) {
     const LightCoeffs coeffs = ct.project_light(light.radiance);

@@ -10,9 +10,10 @@
 
 namespace prt {
 
-CompressionResult compress_cached(const std::string& backend, const std::map<std::string, std::string>& params,
-                                  const TransferInput& input, const Hash128& transfer_key, StageCache& cache,
-                                  CacheMode mode, bool show_progress) {
+CompressionResult compress_cached(const std::string& backend,
+                                  const std::map<std::string, std::string>& params,
+                                  const TransferInput& input, const Hash128& transfer_key,
+                                  StageCache& cache, CacheMode mode, bool show_progress) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto& registry = CompressorRegistry::instance();
   const auto& entry = registry.get(backend);
@@ -32,11 +33,13 @@ CompressionResult compress_cached(const std::string& backend, const std::map<std
       [&] {
         computed = true;
         auto compressor = entry.create(validated);
-        Progress progress("compress " + backend, static_cast<std::int64_t>(input.transfer.rows()), show_progress);
+        Progress progress("compress " + backend, static_cast<std::int64_t>(input.transfer.rows()),
+                          show_progress);
         const auto tc = std::chrono::steady_clock::now();
         auto ct = compressor->compress(input, progress);
         progress.finish();
-        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count();
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count();
         ArchiveWriter w("compressed-transfer", 1);
         w.add_meta("backend", ct->backend());
         w.add_meta("compress_seconds", secs);
@@ -47,7 +50,8 @@ CompressionResult compress_cached(const std::string& backend, const std::map<std
       [&](const ArchiveReader& r) {
         const auto name = r.meta_value<std::string>("backend");
         if (name != backend)
-          throw InputError(r.path(), fmt::format("holds backend '{}', expected '{}'", name, backend));
+          throw InputError(r.path(),
+                           fmt::format("holds backend '{}', expected '{}'", name, backend));
         out.compressed = entry.load(r);
         out.compress_seconds = r.meta().value("compress_seconds", 0.0);
       },

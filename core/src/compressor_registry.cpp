@@ -35,7 +35,8 @@ CompressorRegistry& CompressorRegistry::instance() {
 void CompressorRegistry::add(CompressorEntry entry) {
   if (entry.name.empty()) throw Error("compressor registry: an entry has no name");
   if (!entry.create || !entry.load)
-    throw Error(fmt::format("compressor registry: '{}' lacks a create or load function", entry.name));
+    throw Error(
+        fmt::format("compressor registry: '{}' lacks a create or load function", entry.name));
   if (entries_.contains(entry.name))
     throw Error(fmt::format("compressor registry: '{}' is registered twice ({} and {})", entry.name,
                             entries_.at(entry.name).origin, entry.origin));
@@ -49,7 +50,8 @@ void CompressorRegistry::add(CompressorEntry entry) {
 const CompressorEntry& CompressorRegistry::get(const std::string& name) const {
   auto it = entries_.find(name);
   if (it == entries_.end())
-    throw ParameterError(fmt::format("unknown backend '{}' (registered: {})", name, known_names(*this)));
+    throw ParameterError(
+        fmt::format("unknown backend '{}' (registered: {})", name, known_names(*this)));
   return it->second;
 }
 
@@ -59,8 +61,8 @@ std::vector<std::string> CompressorRegistry::names() const {
   return out;
 }
 
-std::unique_ptr<Compressor> CompressorRegistry::create(const std::string& name,
-                                                       const std::map<std::string, std::string>& params) const {
+std::unique_ptr<Compressor> CompressorRegistry::create(
+    const std::string& name, const std::map<std::string, std::string>& params) const {
   const auto& e = get(name);
   return e.create(ParamSet(name, e.params, params));
 }
@@ -75,13 +77,17 @@ std::vector<std::string> load_plugin(const std::filesystem::path& library) {
   auto version = reinterpret_cast<VersionFn>(::dlsym(handle, "prtlab_plugin_api_version"));
   auto reg = reinterpret_cast<RegisterFn>(::dlsym(handle, "prtlab_register_plugin"));
   if (!version || !reg)
-    throw InputError(library, "not a prtlab plugin (it must export extern \"C\" prtlab_plugin_api_version() and "
-                              "prtlab_register_plugin(prt::CompressorRegistry&))");
+    throw InputError(
+        library,
+        "not a prtlab plugin (it must export extern \"C\" prtlab_plugin_api_version() and "
+        "prtlab_register_plugin(prt::CompressorRegistry&))");
   const int v = version();
   if (v != kPluginApiVersion)
-    throw InputError(library, fmt::format("plugin API version {} does not match this prtlab's version {}; rebuild the "
-                                          "plugin against this prtlab",
-                                          v, kPluginApiVersion));
+    throw InputError(
+        library,
+        fmt::format("plugin API version {} does not match this prtlab's version {}; rebuild the "
+                    "plugin against this prtlab",
+                    v, kPluginApiVersion));
   auto& registry = CompressorRegistry::instance();
   const auto before = registry.names();
   // Entries registered by the plugin are tagged with its path (for `prtlab list`).
@@ -112,9 +118,11 @@ std::unique_ptr<CompressedTransfer> load_compressed(const std::filesystem::path&
   const auto backend = r.meta_value<std::string>("backend");
   auto& registry = CompressorRegistry::instance();
   if (!registry.contains(backend))
-    throw InputError(file, fmt::format("compressed with backend '{}', which is not registered here (registered: {}; "
-                                       "a plugin backend needs --plugin)",
-                                       backend, known_names(registry)));
+    throw InputError(
+        file,
+        fmt::format("compressed with backend '{}', which is not registered here (registered: {}; "
+                    "a plugin backend needs --plugin)",
+                    backend, known_names(registry)));
   return registry.get(backend).load(r);
 }
 

@@ -14,8 +14,9 @@ std::string_view to_string(RadianceBasis b) {
 namespace {
 void check_same_shape(const LocalRadiance& a, const LocalRadiance& b) {
   if (a.basis != b.basis || a.dim != b.dim || a.values.size() != b.values.size())
-    throw Error(fmt::format("local radiance shapes differ: {} x {} ({}) vs {} x {} ({})", a.vertices, a.dim,
-                            to_string(a.basis), b.vertices, b.dim, to_string(b.basis)));
+    throw Error(fmt::format("local radiance shapes differ: {} x {} ({}) vs {} x {} ({})",
+                            a.vertices, a.dim, to_string(a.basis), b.vertices, b.dim,
+                            to_string(b.basis)));
 }
 }  // namespace
 
@@ -41,7 +42,8 @@ double max_relative_error(const LocalRadiance& a, const LocalRadiance& reference
   double worst = 0;
   for (std::size_t i = 0; i < a.values.size(); ++i)
     for (int c = 0; c < 3; ++c)
-      worst = std::max(worst, std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]) / floor);
+      worst = std::max(
+          worst, std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]) / floor);
   return worst;
 }
 

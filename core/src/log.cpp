@@ -26,9 +26,15 @@ std::mutex g_mutex;
 
 }  // namespace
 
-void set_log_level(LogLevel level) { g_level = static_cast<int>(level); }
-LogLevel log_level() { return static_cast<LogLevel>(g_level.load()); }
-int warning_count() { return g_warnings.load(); }
+void set_log_level(LogLevel level) {
+  g_level = static_cast<int>(level);
+}
+LogLevel log_level() {
+  return static_cast<LogLevel>(g_level.load());
+}
+int warning_count() {
+  return g_warnings.load();
+}
 
 void log_message(LogLevel level, std::string_view message) {
   if (level == LogLevel::kWarn) ++g_warnings;

@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -5,7 +6,6 @@
 #include <thread>
 
 #include "prtlab/build_info.h"
-#include <fmt/format.h>
 
 namespace prt {
 

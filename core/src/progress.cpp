@@ -10,7 +10,9 @@ namespace {
 std::atomic<bool> g_quiet{false};
 }
 
-void Progress::set_quiet(bool quiet) { g_quiet = quiet; }
+void Progress::set_quiet(bool quiet) {
+  g_quiet = quiet;
+}
 
 Progress& Progress::null() {
   static Progress p("", 0, false);
@@ -23,7 +25,9 @@ Progress::Progress(std::string label, std::int64_t total, bool enabled)
       enabled_(enabled && !g_quiet.load() && isatty(STDERR_FILENO)),
       start_(std::chrono::steady_clock::now()) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() {
+  finish();
+}
 
 void Progress::advance(std::int64_t n) {
   done_.fetch_add(n, std::memory_order_relaxed);
@@ -61,7 +65,8 @@ void Progress::redraw(bool) {
   for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
   bar[kWidth] = '\0';
   std::fprintf(stderr, "\r\033[K%s [%s] %5.1f%% %lld/%lld  %.1fs, eta %.1fs", label_.c_str(), bar,
-               100.0 * frac, static_cast<long long>(done), static_cast<long long>(total_), secs, eta);
+               100.0 * frac, static_cast<long long>(done), static_cast<long long>(total_), secs,
+               eta);
   std::fflush(stderr);
 }
 

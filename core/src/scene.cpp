@@ -22,21 +22,24 @@ std::string join(const std::set<std::string>& keys) {
 }
 
 /// Reports the first key of `table` that is not in `allowed`, naming the valid ones.
-void reject_unknown_keys(const fs::path& file, const toml::table& table, const std::set<std::string>& allowed,
-                         std::string_view where) {
+void reject_unknown_keys(const fs::path& file, const toml::table& table,
+                         const std::set<std::string>& allowed, std::string_view where) {
   for (const auto& [key, node] : table) {
     if (!allowed.contains(std::string(key.str())))
-      throw InputError(file, fmt::format("line {}: unknown key '{}' in {} (valid keys: {})",
-                                         node.source().begin.line, key.str(), where, join(allowed)));
+      throw InputError(file,
+                       fmt::format("line {}: unknown key '{}' in {} (valid keys: {})",
+                                   node.source().begin.line, key.str(), where, join(allowed)));
   }
 }
 
 template <typename T>
-T require(const fs::path& file, const toml::node_view<const toml::node>& node, std::string_view key) {
+T require(const fs::path& file, const toml::node_view<const toml::node>& node,
+          std::string_view key) {
   auto v = node.value<T>();
   if (!v) {
     if (!node) throw InputError(file, fmt::format("missing required key '{}'", key));
-    throw InputError(file, fmt::format("line {}: key '{}' has the wrong type", node.node()->source().begin.line, key));
+    throw InputError(file, fmt::format("line {}: key '{}' has the wrong type",
+                                       node.node()->source().begin.line, key));
   }
   return *v;
 }
@@ -47,11 +50,13 @@ std::optional<T> optional_value(const fs::path& file, const toml::node_view<cons
   if (!node) return std::nullopt;
   auto v = node.value<T>();
   if (!v)
-    throw InputError(file, fmt::format("line {}: key '{}' has the wrong type", node.node()->source().begin.line, key));
+    throw InputError(file, fmt::format("line {}: key '{}' has the wrong type",
+                                       node.node()->source().begin.line, key));
   return v;
 }
 
-Vec3d vec3(const fs::path& file, const toml::node_view<const toml::node>& node, std::string_view key, Vec3d fallback) {
+Vec3d vec3(const fs::path& file, const toml::node_view<const toml::node>& node,
+           std::string_view key, Vec3d fallback) {
   if (!node) return fallback;
   const auto* arr = node.as_array();
   if (!arr || arr->size() != 3)
@@ -67,7 +72,8 @@ Vec3d vec3(const fs::path& file, const toml::node_view<const toml::node>& node, 
 }
 
 int checked_int(const fs::path& file, std::string_view key, std::int64_t v, int lo, int hi) {
-  if (v < lo || v > hi) throw InputError(file, fmt::format("'{}' = {} is out of range [{}, {}]", key, v, lo, hi));
+  if (v < lo || v > hi)
+    throw InputError(file, fmt::format("'{}' = {} is out of range [{}, {}]", key, v, lo, hi));
   return static_cast<int>(v);
 }
 
@@ -93,33 +99,38 @@ Mesh make_procedural(const fs::path& file, const ScenePart& part, const std::str
   if (it == table.end()) {
     std::set<std::string> names;
     for (const auto& [k, v] : table) names.insert(k);
-    throw InputError(file, fmt::format("part '{}': unknown procedural shape '{}' (known: {})", part.name, shape,
-                                       join(names)));
+    throw InputError(file, fmt::format("part '{}': unknown procedural shape '{}' (known: {})",
+                                       part.name, shape, join(names)));
   }
   for (const auto& [k, v] : part.params)
     if (!it->second.contains(k))
-      throw InputError(file, fmt::format("part '{}': unknown parameter '{}' for procedural:{} (valid: {})", part.name,
-                                         k, shape, join(it->second)));
+      throw InputError(
+          file, fmt::format("part '{}': unknown parameter '{}' for procedural:{} (valid: {})",
+                            part.name, k, shape, join(it->second)));
   auto count = [&](const char* key, double fallback) {
     const double v = param(part, key, fallback);
     if (v < 1 || v > 4096 || v != static_cast<int>(v))
-      throw InputError(file, fmt::format("part '{}': '{}' = {} must be an integer in [1, 4096]", part.name, key, v));
+      throw InputError(file, fmt::format("part '{}': '{}' = {} must be an integer in [1, 4096]",
+                                         part.name, key, v));
     return static_cast<int>(v);
   };
   auto length = [&](const char* key, double fallback) {
     const double v = param(part, key, fallback);
     if (!(v > 0) || !std::isfinite(v))
-      throw InputError(file, fmt::format("part '{}': '{}' = {} must be a positive length", part.name, key, v));
+      throw InputError(
+          file, fmt::format("part '{}': '{}' = {} must be a positive length", part.name, key, v));
     return v;
   };
-  if (shape == "sphere") return make_sphere(length("radius", 0.5), count("segments", 32), count("rings", 16));
+  if (shape == "sphere")
+    return make_sphere(length("radius", 0.5), count("segments", 32), count("rings", 16));
   if (shape == "plane") return make_plane(length("size_x", 1), length("size_z", 1), count("n", 16));
   if (shape == "box")
     return make_box({length("hx", 0.5), length("hy", 0.5), length("hz", 0.5)}, count("n", 8));
   if (shape == "torus")
-    return make_torus(length("major_radius", 0.5), length("minor_radius", 0.2), count("segments", 32),
-                      count("sides", 16));
-  return make_cylinder(length("radius", 0.5), length("height", 1), count("segments", 32), count("rings", 8));
+    return make_torus(length("major_radius", 0.5), length("minor_radius", 0.2),
+                      count("segments", 32), count("sides", 16));
+  return make_cylinder(length("radius", 0.5), length("height", 1), count("segments", 32),
+                       count("rings", 8));
 }
 
 }  // namespace
@@ -130,8 +141,8 @@ SceneDesc parse_scene(const fs::path& file) {
   try {
     root = toml::parse_file(file.string());
   } catch (const toml::parse_error& e) {
-    throw InputError(file, fmt::format("line {}, column {}: {}", e.source().begin.line, e.source().begin.column,
-                                       e.description()));
+    throw InputError(file, fmt::format("line {}, column {}: {}", e.source().begin.line,
+                                       e.source().begin.column, e.description()));
   }
   reject_unknown_keys(file, root,
                       {"name", "description", "local_grid", "cubemap_resolution", "supersampling",
@@ -142,36 +153,46 @@ SceneDesc parse_scene(const fs::path& file) {
   const toml::node_view<const toml::node> r{root};
   d.name = optional_value<std::string>(file, r["name"], "name").value_or(file.stem().string());
   d.description = optional_value<std::string>(file, r["description"], "description").value_or("");
-  d.local_grid = checked_int(file, "local_grid", optional_value<std::int64_t>(file, r["local_grid"], "local_grid").value_or(8), 1, 64);
-  d.cubemap_resolution = checked_int(
-      file, "cubemap_resolution",
-      optional_value<std::int64_t>(file, r["cubemap_resolution"], "cubemap_resolution").value_or(32), 1, 256);
-  d.supersampling = checked_int(file, "supersampling",
-                                optional_value<std::int64_t>(file, r["supersampling"], "supersampling").value_or(2), 1, 15);
+  d.local_grid = checked_int(
+      file, "local_grid",
+      optional_value<std::int64_t>(file, r["local_grid"], "local_grid").value_or(8), 1, 64);
+  d.cubemap_resolution =
+      checked_int(file, "cubemap_resolution",
+                  optional_value<std::int64_t>(file, r["cubemap_resolution"], "cubemap_resolution")
+                      .value_or(32),
+                  1, 256);
+  d.supersampling = checked_int(
+      file, "supersampling",
+      optional_value<std::int64_t>(file, r["supersampling"], "supersampling").value_or(2), 1, 15);
   if (auto tv = optional_value<std::int64_t>(file, r["target_vertices"], "target_vertices")) {
     if (*tv < 4) throw InputError(file, fmt::format("'target_vertices' = {} is too small", *tv));
     d.target_vertices = static_cast<std::size_t>(*tv);
   }
   const auto* parts = root["part"].as_array();
-  if (!parts || parts->empty()) throw InputError(file, "the scene has no [[part]] (at least one is required)");
+  if (!parts || parts->empty())
+    throw InputError(file, "the scene has no [[part]] (at least one is required)");
   if (parts->size() > 65535) throw InputError(file, "too many parts (at most 65535)");
   for (const auto& node : *parts) {
     const auto* t = node.as_table();
     if (!t) throw InputError(file, "each [[part]] must be a table");
     reject_unknown_keys(file, *t,
-                        {"name", "mesh", "btf", "uv_scale", "target_vertices", "transform", "normalize", "params",
-                         "instance"},
+                        {"name", "mesh", "btf", "uv_scale", "target_vertices", "transform",
+                         "normalize", "params", "instance"},
                         "a [[part]]");
     const toml::node_view<const toml::node> p{*t};
     ScenePart part;
-    part.name = optional_value<std::string>(file, p["name"], "name").value_or(fmt::format("part{}", d.parts.size()));
+    part.name = optional_value<std::string>(file, p["name"], "name")
+                    .value_or(fmt::format("part{}", d.parts.size()));
     part.mesh = require<std::string>(file, p["mesh"], "mesh");
     part.btf = optional_value<std::string>(file, p["btf"], "btf").value_or("lambert");
     part.uv_scale = optional_value<double>(file, p["uv_scale"], "uv_scale").value_or(1.0);
-    if (!(part.uv_scale > 0)) throw InputError(file, fmt::format("part '{}': uv_scale must be positive", part.name));
+    if (!(part.uv_scale > 0))
+      throw InputError(file, fmt::format("part '{}': uv_scale must be positive", part.name));
     part.normalize = optional_value<bool>(file, p["normalize"], "normalize").value_or(false);
     if (auto tv = optional_value<std::int64_t>(file, p["target_vertices"], "target_vertices")) {
-      if (*tv < 4) throw InputError(file, fmt::format("part '{}': target_vertices = {} is too small", part.name, *tv));
+      if (*tv < 4)
+        throw InputError(
+            file, fmt::format("part '{}': target_vertices = {} is too small", part.name, *tv));
       part.target_vertices = static_cast<std::size_t>(*tv);
     }
     if (const auto* xf = (*t)["transform"].as_table()) {
@@ -186,26 +207,32 @@ SceneDesc parse_scene(const fs::path& file) {
     if (const auto* params = (*t)["params"].as_table()) {
       for (const auto& [k, v] : *params) {
         auto val = v.value<double>();
-        if (!val) throw InputError(file, fmt::format("part '{}': params.{} must be a number", part.name, k.str()));
+        if (!val)
+          throw InputError(
+              file, fmt::format("part '{}': params.{} must be a number", part.name, k.str()));
         part.params[std::string(k.str())] = *val;
       }
     }
     if (const auto* inst = (*t)["instance"].as_array()) {
       for (const auto& in : *inst) {
         const auto* it = in.as_table();
-        if (!it) throw InputError(file, fmt::format("part '{}': each [[part.instance]] must be a table", part.name));
+        if (!it)
+          throw InputError(
+              file, fmt::format("part '{}': each [[part.instance]] must be a table", part.name));
         reject_unknown_keys(file, *it, {"scale", "translate"}, "a part instance");
         const toml::node_view<const toml::node> x{*it};
         part.instances.push_back({vec3(file, x["scale"], "scale", Vec3d(1.0)),
                                   vec3(file, x["translate"], "translate", Vec3d(0.0))});
       }
     } else if (p["instance"]) {
-      throw InputError(file, fmt::format("part '{}': 'instance' must be an array of tables", part.name));
+      throw InputError(file,
+                       fmt::format("part '{}': 'instance' must be an array of tables", part.name));
     }
     d.parts.push_back(std::move(part));
   }
   if (d.target_vertices && d.parts.size() != 1)
-    throw InputError(file, "a scene-level 'target_vertices' needs exactly one part (set it per part instead)");
+    throw InputError(
+        file, "a scene-level 'target_vertices' needs exactly one part (set it per part instead)");
   return d;
 }
 
@@ -220,7 +247,8 @@ Scene build_scene(const SceneDesc& desc) {
       m = make_procedural(desc.file, part, part.mesh.substr(kProcedural.size()));
     } else {
       if (!part.params.empty())
-        throw InputError(desc.file, fmt::format("part '{}': params are only for procedural meshes", part.name));
+        throw InputError(
+            desc.file, fmt::format("part '{}': params are only for procedural meshes", part.name));
       m = load_mesh(resolve_mesh(part.mesh));
     }
     auto target = part.target_vertices;

@@ -36,10 +36,14 @@ Hash128 scene_input_hash(const SceneDesc& desc) {
   return h.digest();
 }
 
-SceneTransfer precompute_scene_transfer(const SceneDesc& desc, const PrecomputeOptions& options, StageCache& cache) {
+SceneTransfer precompute_scene_transfer(const SceneDesc& desc, const PrecomputeOptions& options,
+                                        StageCache& cache) {
   const auto t0 = std::chrono::steady_clock::now();
   Hasher h;
-  h.add(kTransferArchiveKind).add(kTransferArchiveVersion).add(scene_input_hash(desc)).add(options.sh_order);
+  h.add(kTransferArchiveKind)
+      .add(kTransferArchiveVersion)
+      .add(scene_input_hash(desc))
+      .add(options.sh_order);
   SceneTransfer out;
   out.key = h.digest();
   out.cache_file = cache.path_for("transfer", out.key);

@@ -52,14 +52,16 @@ TransferResult load_transfer(const ArchiveReader& r) {
     columns = r.section<std::uint32_t>("columns");
   }
   try {
-    out.transfer = TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"), columns,
-                                            r.section<std::uint8_t>("counts"));
+    out.transfer =
+        TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"),
+                                 columns, r.section<std::uint8_t>("counts"));
   } catch (const ParameterError& e) {
     throw InputError(r.path(), fmt::format("invalid transfer matrix: {}", e.what()));
   }
   if (sh_order > 0) {
     ShTransfer sh(sh_order, vertices);
-    const auto data = r.view<double>("sh", static_cast<std::uint64_t>(vertices) * sh.dim() * sh.dim());
+    const auto data =
+        r.view<double>("sh", static_cast<std::uint64_t>(vertices) * sh.dim() * sh.dim());
     std::copy(data.begin(), data.end(), sh.mutable_data().begin());
     out.sh = std::move(sh);
   }

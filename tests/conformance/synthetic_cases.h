@@ -28,6 +28,7 @@
 #include "prtlab/cubemap.h"
 #include "prtlab/hemisphere_grid.h"
 #include "prtlab/procedural_shapes.h"
+#include "prtlab/random_transfer.h"
 #include "prtlab/transfer_matrix.h"
 
 namespace prt::conformance {
@@ -49,35 +50,8 @@ struct CaseData {
 inline TransferMatrix random_transfer(std::uint64_t seed, std::size_t vertices, int grid_side,
                                       int resolution, int supersampling, double density,
                                       const std::vector<std::size_t>& empty_vertices = {}) {
-  std::mt19937_64 rng(seed);
-  const int m = grid_side * grid_side, n = 6 * resolution * resolution,
-            max_count = supersampling * supersampling;
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::uniform_int_distribution<int> row_of(0, m - 1), count_of(1, max_count);
-  std::vector<std::uint32_t> offsets{0}, columns;
-  std::vector<std::uint8_t> counts;
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint8_t>>> rows(
-      static_cast<std::size_t>(m));
-  for (std::size_t v = 0; v < vertices; ++v) {
-    for (auto& r : rows) r.clear();
-    const bool empty =
-        std::find(empty_vertices.begin(), empty_vertices.end(), v) != empty_vertices.end();
-    for (int k = 0; k < n && !empty; ++k) {
-      if (u(rng) >= density) continue;
-      const int row = row_of(rng);
-      rows[static_cast<std::size_t>(row)].push_back(
-          {static_cast<std::uint32_t>(k), static_cast<std::uint8_t>(count_of(rng))});
-    }
-    for (const auto& r : rows) {  // columns arrive in increasing order per row
-      for (const auto& [c, x] : r) {
-        columns.push_back(c);
-        counts.push_back(x);
-      }
-      offsets.push_back(static_cast<std::uint32_t>(columns.size()));
-    }
-  }
-  return TransferMatrix::from_csr(vertices, m, n, supersampling, std::move(offsets), columns,
-                                  std::move(counts));
+  return prt::random_transfer(seed, RandomTransferSpec{vertices, grid_side, resolution,
+                                                       supersampling, density, empty_vertices});
 }
 
 /// Two lights: uniform random radiance in [0, 1) per channel, and a high-dynamic-range one

@@ -11,7 +11,13 @@ const std::vector<ParamSpec> kSpecs = {
     {"clusters", ParamType::kInt, "32", 1.0, 4096.0, {}, "number of clusters"},
     {"error", ParamType::kReal, "0", 0.0, 1.0, {}, "relative error budget"},
     {"lossy", ParamType::kBool, "false", {}, {}, {}, "drop residual terms"},
-    {"mode", ParamType::kString, "static", {}, {}, {"static", "iterative", "adaptive"}, "CPCA variant"},
+    {"mode",
+     ParamType::kString,
+     "static",
+     {},
+     {},
+     {"static", "iterative", "adaptive"},
+     "CPCA variant"},
 };
 
 TEST(Params, DefaultsAndGivenValues) {
@@ -41,9 +47,9 @@ TEST(Params, UnknownKeyListsValidOnes) {
 }
 
 TEST(Params, BadValuesAreRejected) {
-  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "0"}}), ParameterError);      // below min
-  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "5000"}}), ParameterError);   // above max
-  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "3.5"}}), ParameterError);    // not an int
+  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "0"}}), ParameterError);     // below min
+  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "5000"}}), ParameterError);  // above max
+  EXPECT_THROW(ParamSet("x", kSpecs, {{"clusters", "3.5"}}), ParameterError);   // not an int
   EXPECT_THROW(ParamSet("x", kSpecs, {{"error", "abc"}}), ParameterError);
   EXPECT_THROW(ParamSet("x", kSpecs, {{"error", "nan"}}), ParameterError);
   EXPECT_THROW(ParamSet("x", kSpecs, {{"lossy", "maybe"}}), ParameterError);

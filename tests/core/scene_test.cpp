@@ -67,8 +67,8 @@ TEST_F(SceneFile, ParsesAndBuildsWithInstances) {
   EXPECT_EQ(s.desc.cubemap_resolution, 8);
   EXPECT_EQ(s.desc.supersampling, 3);
   ASSERT_EQ(s.desc.parts.size(), 2u);
-  const std::size_t plane_verts = 25;                // (n + 1)^2
-  const std::size_t sphere_verts = 9 * 3 + 2 * 8;    // (segments + 1)(rings - 1) + 2 segments
+  const std::size_t plane_verts = 25;              // (n + 1)^2
+  const std::size_t sphere_verts = 9 * 3 + 2 * 8;  // (segments + 1)(rings - 1) + 2 segments
   EXPECT_EQ(s.mesh.vertex_count(), plane_verts + 2 * sphere_verts);
   ASSERT_EQ(s.mesh.triangle_part.size(), s.mesh.triangle_count());
   // The second instance is scaled 2x about the origin, then moved: its top reaches 0.5 + 0.5.
@@ -85,11 +85,14 @@ TEST_F(SceneFile, ErrorsNameFileAndProblem) {
   expect_error("[[part]]\nname = \"p\"\n", "missing required key 'mesh'");
   expect_error("local_grid = 0\n[[part]]\nmesh = \"procedural:plane\"\n", "out of range");
   expect_error("local_grid = \"eight\"\n[[part]]\nmesh = \"procedural:plane\"\n", "wrong type");
-  expect_error("[[part]]\nmesh = \"procedural:plane\"\ntransform = { scale = [1, 2] }\n", "array of 3");
+  expect_error("[[part]]\nmesh = \"procedural:plane\"\ntransform = { scale = [1, 2] }\n",
+               "array of 3");
   expect_error("[[part]]\nmesh = \"procedural:plane\"\ncolour = 3\n", "unknown key 'colour'");
   expect_error("this is not toml ===", "line 1");
-  expect_error("target_vertices = 100\n[[part]]\nmesh = \"procedural:plane\"\n[[part]]\nmesh = \"procedural:plane\"\n",
-               "exactly one part");
+  expect_error(
+      "target_vertices = 100\n[[part]]\nmesh = \"procedural:plane\"\n[[part]]\nmesh = "
+      "\"procedural:plane\"\n",
+      "exactly one part");
 }
 
 TEST_F(SceneFile, ProceduralShapeErrorsAtBuild) {
@@ -105,7 +108,8 @@ TEST_F(SceneFile, ProceduralShapeErrorsAtBuild) {
   build_error("[[part]]\nmesh = \"procedural:cone\"\n", "unknown procedural shape 'cone'");
   build_error("[[part]]\nmesh = \"procedural:sphere\"\nparams = { radius = 1.0, sgements = 8 }\n",
               "unknown parameter 'sgements'");
-  build_error("[[part]]\nmesh = \"procedural:sphere\"\nparams = { radius = -1.0 }\n", "positive length");
+  build_error("[[part]]\nmesh = \"procedural:sphere\"\nparams = { radius = -1.0 }\n",
+              "positive length");
   build_error("[[part]]\nmesh = \"procedural:plane\"\nparams = { n = 2.5 }\n", "integer");
   build_error("[[part]]\nmesh = \"no_such_mesh.off\"\n", "no_such_mesh.off");
 }
@@ -126,16 +130,22 @@ TEST(PaperScenes, VertexCounts) {
     std::size_t paper_vertices;
     bool needs_data;
   };
-  const Case cases[] = {{"tiny-sphere-plane", 320, false}, {"chair", 16101, false}, {"temple", 32409, false},
-                        {"bunny", 3286, true},            {"armor", 10652, true}};
+  const Case cases[] = {{"tiny-sphere-plane", 320, false},
+                        {"chair", 16101, false},
+                        {"temple", 32409, false},
+                        {"bunny", 3286, true},
+                        {"armor", 10652, true}};
   for (const auto& c : cases) {
     if (c.needs_data && !fs::exists(data_dir() / "meshes" / "bunny00.off")) {
       std::printf("skipping %s: data cache missing (run scripts/setup.sh --data)\n", c.scene);
       continue;
     }
-    const Scene s = load_scene(fs::path(PRTLAB_SOURCE_DIR) / "scenes" / (std::string(c.scene) + ".toml"));
-    const double rel = std::abs(double(s.mesh.vertex_count()) - double(c.paper_vertices)) / double(c.paper_vertices);
-    EXPECT_LT(rel, 0.005) << c.scene << ": " << s.mesh.vertex_count() << " vertices vs " << c.paper_vertices;
+    const Scene s =
+        load_scene(fs::path(PRTLAB_SOURCE_DIR) / "scenes" / (std::string(c.scene) + ".toml"));
+    const double rel = std::abs(double(s.mesh.vertex_count()) - double(c.paper_vertices)) /
+                       double(c.paper_vertices);
+    EXPECT_LT(rel, 0.005) << c.scene << ": " << s.mesh.vertex_count() << " vertices vs "
+                          << c.paper_vertices;
   }
 }
 

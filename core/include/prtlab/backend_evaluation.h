@@ -34,16 +34,17 @@ struct BackendEvaluation {
   std::vector<LightError> errors;
   double mean_rel_l2 = 0;
   double max_rel_l2 = 0;
-  double ms_cpp = 0;                       ///< median C++ relight (light projection excluded)
-  double ms_project = 0;                   ///< median light projection
-  std::optional<double> ms_opencl;         ///< median kernel time; empty without a device
-  std::optional<double> opencl_vs_cpp;     ///< relative L2 of OpenCL vs C++ output
-  std::string device;                      ///< device label, or "none"
+  double ms_cpp = 0;                    ///< median C++ relight (light projection excluded)
+  double ms_project = 0;                ///< median light projection
+  std::optional<double> ms_opencl;      ///< median kernel time; empty without a device
+  std::optional<double> opencl_vs_cpp;  ///< relative L2 of OpenCL vs C++ output
+  std::string device;                   ///< device label, or "none"
 };
 
 /// Evaluate `ct` on `lights` (error per light vs the exact product with `exact`), timing the
 /// first light's relight `repeats` times. `context` may be null (no OpenCL).
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
-                                   const std::vector<EvaluationLight>& lights, ClContext* context, int repeats);
+                                   const std::vector<EvaluationLight>& lights, ClContext* context,
+                                   int repeats);
 
 }  // namespace prt

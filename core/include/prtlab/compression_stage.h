@@ -22,8 +22,10 @@ struct CompressionResult {
   double seconds = 0;           ///< this call (load on a hit)
 };
 
-CompressionResult compress_cached(const std::string& backend, const std::map<std::string, std::string>& params,
-                                  const TransferInput& input, const Hash128& transfer_key, StageCache& cache,
-                                  CacheMode mode = CacheMode::kUse, bool show_progress = true);
+CompressionResult compress_cached(const std::string& backend,
+                                  const std::map<std::string, std::string>& params,
+                                  const TransferInput& input, const Hash128& transfer_key,
+                                  StageCache& cache, CacheMode mode = CacheMode::kUse,
+                                  bool show_progress = true);
 
 }  // namespace prt

@@ -29,10 +29,10 @@ class ClContext;
 
 /// What a compressor sees: the exact transfer and the bases it lives in.
 struct TransferInput {
-  const TransferMatrix& transfer;          ///< pixel basis, (vertices * M) x N, exact
-  const ShTransfer* sh = nullptr;          ///< SH transfer, when the scene computed one
-  const CubemapLayout& cubemap;            ///< global basis (N = 6 R^2)
-  const HemisphereGrid& grid;              ///< local basis (M = S^2)
+  const TransferMatrix& transfer;  ///< pixel basis, (vertices * M) x N, exact
+  const ShTransfer* sh = nullptr;  ///< SH transfer, when the scene computed one
+  const CubemapLayout& cubemap;    ///< global basis (N = 6 R^2)
+  const HemisphereGrid& grid;      ///< local basis (M = S^2)
 };
 
 /// Light in a backend's basis: `basis` names it ("pixel", "haar", "sh5", "srbf642", ...).
@@ -98,7 +98,8 @@ class CompressedTransfer {
 class Compressor {
  public:
   virtual ~Compressor() = default;
-  virtual std::unique_ptr<CompressedTransfer> compress(const TransferInput& input, Progress& progress) const = 0;
+  virtual std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
+                                                       Progress& progress) const = 0;
 };
 
 }  // namespace prt

@@ -28,7 +28,7 @@ inline constexpr int kPluginApiVersion = 1;
 
 struct CompressorEntry {
   std::string name;
-  std::string description;       ///< one line: the method and its paper
+  std::string description;        ///< one line: the method and its paper
   std::vector<ParamSpec> params;  ///< backend-specific; shared ones are added by ParamSet
   bool lossless = false;          ///< relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
@@ -50,7 +50,8 @@ class CompressorRegistry {
   std::vector<std::string> names() const;
 
   /// Validate parameters and construct.
-  std::unique_ptr<Compressor> create(const std::string& name, const std::map<std::string, std::string>& params) const;
+  std::unique_ptr<Compressor> create(const std::string& name,
+                                     const std::map<std::string, std::string>& params) const;
 
  private:
   std::map<std::string, CompressorEntry> entries_;
@@ -58,7 +59,9 @@ class CompressorRegistry {
 
 /// Static registrar used by PRT_REGISTER_COMPRESSOR.
 struct CompressorRegistrar {
-  explicit CompressorRegistrar(CompressorEntry (*make)()) { CompressorRegistry::instance().add(make()); }
+  explicit CompressorRegistrar(CompressorEntry (*make)()) {
+    CompressorRegistry::instance().add(make());
+  }
 };
 
 /// Load a plugin shared library; refuses a missing file, missing symbols or an API mismatch
@@ -73,5 +76,7 @@ std::unique_ptr<CompressedTransfer> load_compressed(const std::filesystem::path&
 
 #define PRT_CONCAT_INNER(a, b) a##b
 #define PRT_CONCAT(a, b) PRT_CONCAT_INNER(a, b)
-#define PRT_REGISTER_COMPRESSOR(make_entry) \
-  static const ::prt::CompressorRegistrar PRT_CONCAT(prt_registrar_, __LINE__){&make_entry}
+#define PRT_REGISTER_COMPRESSOR(make_entry)                                      \
+  static const ::prt::CompressorRegistrar PRT_CONCAT(prt_registrar_, __LINE__) { \
+    &make_entry                                                                  \
+  }

@@ -33,12 +33,13 @@ class ParameterError : public Error {
   using Error::Error;
 };
 
-[[noreturn]] void check_failed(const char* expr, const char* file, int line, const std::string& msg);
+[[noreturn]] void check_failed(const char* expr, const char* file, int line,
+                               const std::string& msg);
 
 }  // namespace prt
 
-#define PRT_CHECK(cond, ...)                                                              \
-  do {                                                                                    \
+#define PRT_CHECK(cond, ...)                                                                 \
+  do {                                                                                       \
     if (!(cond)) ::prt::check_failed(#cond, __FILE__, __LINE__, ::fmt::format(__VA_ARGS__)); \
   } while (0)
 

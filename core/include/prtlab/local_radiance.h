@@ -17,16 +17,17 @@ std::string_view to_string(RadianceBasis b);
 
 struct LocalRadiance {
   RadianceBasis basis = RadianceBasis::kPixel;
-  int dim = 0;               ///< values per vertex (M, or n SH coefficients)
+  int dim = 0;  ///< values per vertex (M, or n SH coefficients)
   std::size_t vertices = 0;
-  std::vector<Rgb> values;   ///< vertices * dim, index = vertex * dim + j
+  std::vector<Rgb> values;  ///< vertices * dim, index = vertex * dim + j
 
   LocalRadiance() = default;
   LocalRadiance(RadianceBasis b, int d, std::size_t v)
       : basis(b), dim(d), vertices(v), values(static_cast<std::size_t>(d) * v, Rgb(0.f)) {}
   std::size_t rows() const { return values.size(); }
   std::span<const Rgb> vertex(std::size_t v) const {
-    return std::span<const Rgb>(values).subspan(v * static_cast<std::size_t>(dim), static_cast<std::size_t>(dim));
+    return std::span<const Rgb>(values).subspan(v * static_cast<std::size_t>(dim),
+                                                static_cast<std::size_t>(dim));
   }
 };
 

@@ -22,11 +22,11 @@ std::string_view to_string(ParamType t);
 struct ParamSpec {
   std::string key;
   ParamType type = ParamType::kReal;
-  std::string default_value;              ///< as the user would write it
-  std::optional<double> min;              ///< inclusive, for kInt / kReal
-  std::optional<double> max;              ///< inclusive, for kInt / kReal
-  std::vector<std::string> choices;       ///< for kString: the allowed values (empty: any)
-  std::string doc;                        ///< one sentence, with units
+  std::string default_value;         ///< as the user would write it
+  std::optional<double> min;         ///< inclusive, for kInt / kReal
+  std::optional<double> max;         ///< inclusive, for kInt / kReal
+  std::vector<std::string> choices;  ///< for kString: the allowed values (empty: any)
+  std::string doc;                   ///< one sentence, with units
 };
 
 /// Parameters every backend accepts.
@@ -37,8 +37,10 @@ class ParamSet {
   using Value = std::variant<std::int64_t, double, bool, std::string>;
 
   ParamSet() = default;
-  /// Validates `given` against `specs` (plus the shared specs). `owner` names the backend in messages.
-  ParamSet(std::string owner, std::span<const ParamSpec> specs, const std::map<std::string, std::string>& given);
+  /// Validates `given` against `specs` (plus the shared specs). `owner` names the backend in
+  /// messages.
+  ParamSet(std::string owner, std::span<const ParamSpec> specs,
+           const std::map<std::string, std::string>& given);
 
   std::int64_t get_int(const std::string& key) const;
   double get_real(const std::string& key) const;

@@ -72,6 +72,8 @@ struct Scene {
 /// Build the scene's mesh: load/generate each part, resample to its target, transform,
 /// merge, compute normals and tangents.
 Scene build_scene(const SceneDesc& desc);
-inline Scene load_scene(const std::filesystem::path& file) { return build_scene(parse_scene(file)); }
+inline Scene load_scene(const std::filesystem::path& file) {
+  return build_scene(parse_scene(file));
+}
 
 }  // namespace prt

@@ -29,8 +29,8 @@ struct SceneTransfer {
   TransferResult result;
   Hash128 key;
   bool cache_hit = false;
-  double seconds = 0;      ///< this call's wall time (load on a hit, build + compute on a miss)
-  double mesh_seconds = 0; ///< building the mesh (0 on a hit)
+  double seconds = 0;       ///< this call's wall time (load on a hit, build + compute on a miss)
+  double mesh_seconds = 0;  ///< building the mesh (0 on a hit)
   std::filesystem::path cache_file;
 };
 

@@ -15,7 +15,8 @@ inline constexpr std::string_view kTransferArchiveKind = "transfer-matrix";
 inline constexpr std::uint32_t kTransferArchiveVersion = 1;
 
 ArchiveWriter save_transfer(const TransferResult& result);
-/// Verifies every CSR invariant (TransferMatrix::from_csr); a violation is an InputError naming the file.
+/// Verifies every CSR invariant (TransferMatrix::from_csr); a violation is an InputError naming the
+/// file.
 TransferResult load_transfer(const ArchiveReader& archive);
 
 }  // namespace prt
