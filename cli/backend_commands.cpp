@@ -4,6 +4,7 @@
 #include "commands.h"
 #include "prtlab/backend_evaluation.h"
 #include "prtlab/cl_context.h"
+#include "prtlab/cl_device.h"
 #include "prtlab/compression_stage.h"
 #include "prtlab/compressor_registry.h"
 #include "prtlab/data_paths.h"
@@ -169,7 +170,30 @@ void run_compress(const CompressCli& o) {
 
 }  // namespace
 
+static void run_devices(bool json) {
+  const auto devices = list_devices();
+  const auto chosen = open_device_from_options();
+  if (json) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& d : devices) list.push_back(d.info);
+    print_json({{"devices", list},
+                {"selected", chosen ? nlohmann::json(chosen->info()) : nlohmann::json(nullptr)}});
+    return;
+  }
+  if (devices.empty())
+    std::printf("no OpenCL devices (install pocl-opencl-icd, or a GPU driver's ICD)\n");
+  for (const auto& d : devices) std::printf("  %s\n", d.info.label().c_str());
+  std::printf("selected: %s\n",
+              chosen ? chosen->info().label().c_str() : "none (C++ reference paths)");
+}
+
 void add_backend_commands(CLI::App& app) {
+  auto devices_json = std::make_shared<bool>(false);
+  auto* dv = app.add_subcommand(
+      "devices", "List the OpenCL devices and the one --device / PRTLAB_DEVICE selects");
+  dv->add_flag("--json", *devices_json, "Machine-readable output (docs/cli.md)");
+  dv->callback([devices_json] { run_devices(*devices_json); });
+
   auto lo = std::make_shared<ListCli>();
   auto* l =
       app.add_subcommand("list", "List the registered compressor backends and their parameters");

@@ -13,23 +13,15 @@
 
 #include "prtlab/environment_map.h"
 #include "prtlab/image_io.h"
+#include "support/cli_runner.h"
 
 namespace prt {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using RunResult = prt::testing::CliResult;
+using prt::testing::slurp_file;
 
 class EnvCli : public ::testing::Test {
  protected:
@@ -48,17 +40,7 @@ class EnvCli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  RunResult run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string("\"") + PRTLAB_CLI_PATH + "\" " + args + " >\"" +
-                            out.string() + "\" 2>\"" + err.string() + "\"";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
+  RunResult run(const std::string& args) const { return prt::testing::run_cli(args, dir_); }
 
   fs::path dir_, exr_;
   Vec3d power_{0.0};

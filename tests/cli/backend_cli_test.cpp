@@ -1,0 +1,111 @@
+// `prtlab precompute`, `compress`, `relight`, `list` and `devices` on the tiny test scene, run as a
+// user would: exit codes, documented JSON keys, the cache, and errors that name the problem.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "prtlab/data_paths.h"
+#include "support/cli_runner.h"
+
+namespace prt {
+namespace {
+namespace fs = std::filesystem;
+using prt::testing::run_cli;
+
+class BackendCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("prtlab_backend_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    env_ = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" ";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  prt::testing::CliResult run(const std::string& args) const { return run_cli(args, dir_, env_); }
+  nlohmann::json run_json(const std::string& args) const {
+    const auto r = run(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
+    return nlohmann::json::parse(r.out);
+  }
+  fs::path dir_;
+  std::string env_;
+};
+
+TEST_F(BackendCli, PrecomputeTwiceIsACacheHit) {
+  const auto first = run_json("-q precompute tiny-sphere-plane --json");
+  const auto second = run_json("-q precompute tiny-sphere-plane --json");
+  EXPECT_FALSE(first["cache_hit"].get<bool>());
+  EXPECT_TRUE(second["cache_hit"].get<bool>());
+  EXPECT_EQ(first["nnz"], second["nnz"]);
+  EXPECT_EQ(first["vertices"].get<int>(), 320);
+  EXPECT_EQ(first["columns"].get<int>(), 6 * 8 * 8);
+  EXPECT_EQ(first["rows"].get<int>(), 320 * 16);
+  EXPECT_DOUBLE_EQ(first["mflops_per_relight"].get<double>(),
+                   2.0 * first["nnz"].get<double>() / 1e6);
+  EXPECT_TRUE(first.contains("prtlab"));
+  const auto forced = run_json("-q precompute tiny-sphere-plane --json --force");
+  EXPECT_FALSE(forced["cache_hit"].get<bool>());
+}
+
+TEST_F(BackendCli, CompressUncompressedIsExact) {
+  const auto j =
+      run_json("-q compress tiny-sphere-plane --backend uncompressed --lights 2 --repeat 1 --json");
+  EXPECT_LT(j["rel_l2_error_max"].get<double>(), 1e-6);
+  EXPECT_EQ(j["errors"].size(), 2u);
+  EXPECT_NEAR(j["computation_percent"].get<double>(), 100.0, 1e-9);
+  EXPECT_GT(j["storage_bytes"].get<double>(), 0.0);
+  EXPECT_EQ(j["parameters"]["seed"], "1");
+  if (!j["ms_per_relight_opencl"].is_null()) {
+    EXPECT_LT(j["opencl_vs_cpp_rel_l2"].get<double>(), 1e-5);
+  }
+}
+
+TEST_F(BackendCli, RelightWithBackendMatchesExact) {
+  if (!fs::exists(data_dir() / "envmaps" / "courtyard.exr"))
+    GTEST_SKIP() << "data cache missing (scripts/setup.sh --data)";
+  const auto exact = run_json("-q relight tiny-sphere-plane --env courtyard --repeat 1 --json");
+  EXPECT_LT(exact["float_vs_double_rel_l2"].get<double>(), 1e-6);
+  const auto backend = run_json(
+      "-q relight tiny-sphere-plane --env courtyard --repeat 1 --backend uncompressed --json");
+  EXPECT_LT(backend["rel_l2_error"].get<double>(), 1e-6);
+}
+
+TEST_F(BackendCli, BadBackendOrParameterIsAClearError) {
+  auto r = run("compress tiny-sphere-plane --backend no-such-backend");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown backend 'no-such-backend'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("uncompressed"), std::string::npos) << r.err;
+  r = run("compress tiny-sphere-plane --backend uncompressed --param bogus=1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown parameter 'bogus'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("opencl_kernel"), std::string::npos) << r.err;  // lists the valid ones
+  r = run("compress tiny-sphere-plane --backend uncompressed --param seed=-1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("out of range"), std::string::npos) << r.err;
+  r = run("precompute no-such-scene");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no-such-scene"), std::string::npos) << r.err;
+}
+
+TEST_F(BackendCli, ListAndDevices) {
+  const auto list = run_json("list --json");
+  bool found = false;
+  for (const auto& b : list["backends"])
+    if (b["name"] == "uncompressed") {
+      found = true;
+      EXPECT_TRUE(b["lossless"].get<bool>());
+      EXPECT_EQ(b["origin"], "built-in");
+    }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(list["shared_parameters"][0]["key"], "seed");
+  const auto devices = run_json("devices --json");
+  ASSERT_TRUE(devices.contains("devices"));
+  EXPECT_EQ(devices["selected"].is_null(), devices["devices"].empty());
+  const auto strict = run("--device no-such-device --strict-device devices");
+  EXPECT_EQ(strict.exit_code, 1);
+  EXPECT_NE(strict.err.find("no-such-device"), std::string::npos) << strict.err;
+}
+
+}  // namespace
+}  // namespace prt
