@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 // Every backend built into prtlab. Adding a backend folder adds its name here: a backend whose
 // registrar is lost (linker, glob, a renamed folder) then fails this test instead of silently
 // disappearing from every table.
-const std::vector<std::string> kBuiltinBackends = {"uncompressed"};
+const std::vector<std::string> kBuiltinBackends = {"uncompressed", "bicluster"};
 
 class ScratchDir {
  public:
