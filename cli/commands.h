@@ -31,6 +31,9 @@ void add_scene_commands(CLI::App& app);
 void add_env_commands(CLI::App& app);
 void add_transfer_commands(CLI::App& app);
 void add_backend_commands(CLI::App& app);
+void add_experiment_commands(CLI::App& app);
+void add_btf_commands(CLI::App& app);
+void add_render_commands(CLI::App& app);
 
 /// The OpenCL context the global options ask for; nullopt with --no-opencl or without OpenCL.
 std::optional<ClContext> open_device_from_options();

@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
   cli::add_env_commands(app);
   cli::add_transfer_commands(app);
   cli::add_backend_commands(app);
+  cli::add_experiment_commands(app);
+  cli::add_btf_commands(app);
+  cli::add_render_commands(app);
 
   try {
     app.parse(argc, argv);
