@@ -129,6 +129,7 @@ void run_compress(const CompressCli& o) {
     j["data_percent"] =
         100.0 * static_cast<double>(storage.total_bytes()) / static_cast<double>(t.dense_bytes());
     j["declared_error_bound"] = cr.compressed->declared_error_bound();
+    j["declared_error_norm"] = to_string(cr.compressed->declared_error_norm());
     j["rel_l2_error_mean"] = ev.mean_rel_l2;
     j["rel_l2_error_max"] = ev.max_rel_l2;
     nlohmann::json per = nlohmann::json::array();

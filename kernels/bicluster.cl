@@ -1,57 +1,108 @@
-// Backend `bicluster`: L* = sum_i B_i L + residual, in two kernels (Algorithm 2 of Sun et al.,
-// docs/backends/bicluster.md):
+// Backend `bicluster`: L* = sum_i B_i L in two kernels (Algorithm 2 of Sun et al.; layout in
+// compressors/bicluster/bicluster.h and docs/backends/bicluster.md):
 //
-//   bicluster_phase1   one work-item per bicluster: P_i = sum_m t_m L[k_m] (float4 RGB)
-//   bicluster_phase2   one work-item per row: sum of P_i over the row's bicluster ids I_j, plus
-//                      the row's residual 1x1 terms, times the scale 1/s^2
+//   bicluster_phase1   one work-item per bicluster: P_i = sum_m t_m L[k_m] (float4 RGB; zero
+//                      slots have no columns: 0); the extra work-item i = B zeroes the zero slot
+//                      at or above B, which pads lanes
+//   bicluster_phase2   one work-item per slice of 4 rows (SELL-4): a fixed-length loop over the
+//                      slice's steps, each lane adding its u16 delta to its id and then P_id
+//                      (one accumulator per row), then each row times 1/s^2
+//   bicluster_phase2_ids  the same over u32 ids expanded at upload (opencl_ids=u32)
 //
-// Host defines: PRT_COLUMN_T (ushort or uint), PRT_WG_SIZE. Constants and residual counts are
-// signed 16-bit counts. The light and P are float4 (RGB + pad); the output is packed RGB.
+// Host defines: PRT_COLUMN_T (ushort or uint), PRT_LANE_T (uchar or ushort), PRT_WG_SIZE.
+// Constants are signed 16-bit counts. The light and P are float4 (RGB + pad); the output is
+// packed RGB.
 
 #ifndef PRT_COLUMN_T
 #define PRT_COLUMN_T ushort
 #endif
+#ifndef PRT_PHASE1_PER_ITEM
+#define PRT_PHASE1_PER_ITEM 8
+#endif
+#ifndef PRT_LANE_T
+#define PRT_LANE_T uchar
+#endif
 
-__kernel PRT_WG_ATTR void bicluster_phase1(const uint biclusters,
+__kernel PRT_WG_ATTR void bicluster_phase1(const uint biclusters, const uint last_zero,
                                            __global const uint* restrict col_offsets,
                                            __global const PRT_COLUMN_T* restrict columns,
                                            __global const short* restrict constants,
                                            __global const float4* restrict light,
                                            __global float4* restrict products) {
-  const uint i = get_global_id(0);
-  PRT_GUARD(i, biclusters);
-  const uint end = col_offsets[i + 1];
-  float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f);
-  uint q = col_offsets[i];
-  for (; q + 2 <= end; q += 2) {
-    a0 += convert_float(constants[q]) * light[columns[q]];
-    a1 += convert_float(constants[q + 1]) * light[columns[q + 1]];
+  // PRT_PHASE1_PER_ITEM consecutive biclusters per work-item: fewer, longer work-items (a
+  // bicluster is one or two multiply-adds, less than PoCL's per-work-item cost).
+  const uint first = get_global_id(0) * PRT_PHASE1_PER_ITEM;
+  PRT_GUARD(first, biclusters + 1);
+  if (get_global_id(0) == 0) products[last_zero] = (float4)(0.0f);
+  const uint stop = min(first + PRT_PHASE1_PER_ITEM, biclusters);
+  for (uint i = first; i < stop; ++i) {
+    const uint end = col_offsets[i + 1];
+    float4 a = (float4)(0.0f);
+    for (uint q = col_offsets[i]; q < end; ++q)
+      a += convert_float(constants[q]) * light[columns[q]];
+    products[i] = a;
   }
-  if (q < end) a0 += convert_float(constants[q]) * light[columns[q]];
-  products[i] = a0 + a1;
 }
 
-__kernel PRT_WG_ATTR void bicluster_phase2(const uint rows, const float scale,
-                                           __global const uint* restrict row_offsets,
-                                           __global const uint* restrict row_bics,
+__kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint slices_per_vertex,
+                                           const uint m, const float scale,
+                                           __global const uint* restrict slice_offsets,
+                                           __global const PRT_LANE_T* restrict slice_rows,
+                                           __global const uint* restrict slice_base,
+                                           __global const ushort* restrict codes,
                                            __global const float4* restrict products,
-                                           __global const uint* restrict res_offsets,
-                                           __global const PRT_COLUMN_T* restrict res_columns,
-                                           __global const short* restrict res_counts,
-                                           __global const float4* restrict light,
                                            __global float* restrict out) {
-  const uint row = get_global_id(0);
-  PRT_GUARD(row, rows);
-  float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f);
-  uint q = row_offsets[row];
-  const uint end = row_offsets[row + 1];
-  for (; q + 2 <= end; q += 2) {
-    a0 += products[row_bics[q]];
-    a1 += products[row_bics[q + 1]];
+  const uint s = get_global_id(0);
+  PRT_GUARD(s, slices);
+  float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f), a3 = (float4)(0.0f);
+  uint i0 = slice_base[s], i1 = i0, i2 = i0, i3 = i0;
+  const uint end = slice_offsets[s + 1];
+  // A step's four u16 codes are one aligned 8-byte word (offsets are multiples of 4).
+  __global const ulong* steps = (__global const ulong*)codes;
+  for (uint q = slice_offsets[s] / 4; q < end / 4; ++q) {
+    const ulong c = steps[q];
+    i0 += (uint)(c & 0xffffu);
+    i1 += (uint)((c >> 16) & 0xffffu);
+    i2 += (uint)((c >> 32) & 0xffffu);
+    i3 += (uint)(c >> 48);
+    a0 += products[i0];
+    a1 += products[i1];
+    a2 += products[i2];
+    a3 += products[i3];
   }
-  if (q < end) a0 += products[row_bics[q]];
-  const uint rend = res_offsets[row + 1];
-  for (uint r = res_offsets[row]; r < rend; ++r)
-    a1 += convert_float(res_counts[r]) * light[res_columns[r]];
-  prt_store_rgb3(out, row, (a0 + a1) * scale);
+  const uint base = (s / slices_per_vertex) * m;
+  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
+             j3 = slice_rows[4 * s + 3];
+  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
+  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
+  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
+  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
+}
+
+// The same with the lanes' ids expanded to u32 at upload (opencl_ids=u32): no decoding.
+__kernel PRT_WG_ATTR void bicluster_phase2_ids(const uint slices, const uint slices_per_vertex,
+                                               const uint m, const float scale,
+                                               __global const uint* restrict slice_offsets,
+                                               __global const PRT_LANE_T* restrict slice_rows,
+                                               __global const uint* restrict ids,
+                                               __global const float4* restrict products,
+                                               __global float* restrict out) {
+  const uint s = get_global_id(0);
+  PRT_GUARD(s, slices);
+  float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f), a3 = (float4)(0.0f);
+  const uint end = slice_offsets[s + 1];
+  for (uint q = slice_offsets[s]; q < end; q += 4) {
+    const uint4 id = vload4(0, ids + q);
+    a0 += products[id.s0];
+    a1 += products[id.s1];
+    a2 += products[id.s2];
+    a3 += products[id.s3];
+  }
+  const uint base = (s / slices_per_vertex) * m;
+  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
+             j3 = slice_rows[4 * s + 3];
+  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
+  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
+  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
+  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
 }

@@ -1,4 +1,6 @@
-// The OpenCL relight of backend `bicluster` (kernels/bicluster.cl): two launches per relight.
+// The OpenCL relight of backend `bicluster` (kernels/bicluster.cl): two launches per relight,
+// phase 1 a work-item per bicluster (plus one for the last zero slot's product), phase 2 a
+// work-item per slice of 4 rows.
 #include <limits>
 
 #include "bicluster/bicluster.h"
@@ -12,6 +14,8 @@ static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb must be three packed floats
 
 // 64 work-items per group, as the `uncompressed` rows kernel (short PoCL work-item loops).
 constexpr std::size_t kWorkGroup = 64;
+// Biclusters per work-item of phase 1 (kernels/bicluster.cl).
+constexpr std::size_t kPhase1PerItem = 8;
 
 template <typename T>
 cl::Buffer upload_nonempty(ClContext& ctx, const std::vector<T>& v, const char* what) {
@@ -27,6 +31,19 @@ cl::Buffer upload_columns(ClContext& ctx, const std::vector<std::uint32_t>& c, b
                           const char* what) {
   if (narrow) return upload_nonempty(ctx, std::vector<std::uint16_t>(c.begin(), c.end()), what);
   return upload_nonempty(ctx, c, what);
+}
+
+// The lanes' running ids, zero-slot steps included, in the codes' positions.
+std::vector<std::uint32_t> expand_ids(const BiclusterArrays& a) {
+  std::vector<std::uint32_t> ids(a.slice_codes.size());
+  for (std::size_t s = 0; s < a.slice_count(); ++s) {
+    for (std::uint32_t lane = 0; lane < kSliceRows; ++lane) {
+      std::uint32_t id = a.slice_base[s];
+      for (std::uint32_t q = a.slice_offsets[s] + lane; q < a.slice_offsets[s + 1]; q += kSliceRows)
+        ids[q] = id += a.slice_codes[q];
+    }
+  }
+  return ids;
 }
 
 double event_ms(ClContext& ctx, cl::Event& event, const std::string& name) {
@@ -45,44 +62,69 @@ class BiclusterDevice final : public DeviceRelighter {
         rows_(a.rows()),
         cols_(static_cast<std::size_t>(a.pixel_count)),
         biclusters_(a.bicluster_count()),
+        slices_(a.slice_count()),
         dim_(a.local_count),
         vertices_(a.vertices),
         light_host_(cols_) {
     if (rows_ > std::numeric_limits<std::uint32_t>::max() ||
-        biclusters_ > std::numeric_limits<std::uint32_t>::max())
+        a.product_count() > std::numeric_limits<std::uint32_t>::max())
       throw ParameterError(fmt::format("{}: {} rows / {} biclusters exceed the kernels' u32 ids",
                                        kName, rows_, biclusters_));
     const bool narrow = a.pixel_count <= 65536;
+    const bool narrow_rows = a.local_count <= 255;
     KernelDefines defines;
-    defines.set("PRT_WG_SIZE", kWorkGroup).set("PRT_COLUMN_T", narrow ? "ushort" : "uint");
+    defines.set("PRT_WG_SIZE", kWorkGroup)
+        .set("PRT_COLUMN_T", narrow ? "ushort" : "uint")
+        .set("PRT_LANE_T", narrow_rows ? "uchar" : "ushort")
+        .set("PRT_PHASE1_PER_ITEM", kPhase1PerItem);
     const cl::Program program = build_program(ctx, "bicluster", defines);
     phase1_ = make_kernel(program, "bicluster_phase1");
-    phase2_ = make_kernel(program, "bicluster_phase2");
-    range1_ = LaunchRange::linear(biclusters_, kWorkGroup);
-    range2_ = LaunchRange::linear(rows_, kWorkGroup);
+    wide_ids_ =
+        a.device_ids == DeviceIds::kU32 || (a.device_ids == DeviceIds::kAuto && ctx.info().is_cpu);
+    phase2_ = make_kernel(program, wide_ids_ ? "bicluster_phase2_ids" : "bicluster_phase2");
+    range1_ = LaunchRange::linear(biclusters_ / kPhase1PerItem + 1, kWorkGroup);
+    const std::size_t products = a.product_count();
+    range2_ = LaunchRange::linear(slices_, kWorkGroup);
 
     col_offsets_ = upload_nonempty(ctx, a.bic_col_offsets, "bicluster column offsets");
     columns_ = upload_columns(ctx, a.bic_columns, narrow, "bicluster columns");
     constants_ = upload_nonempty(ctx, a.bic_constants, "bicluster constants");
-    row_offsets_ = upload_nonempty(ctx, a.row_bic_offsets, "bicluster row offsets");
-    row_bics_ = upload_nonempty(ctx, a.row_bics, "bicluster row ids");
-    res_offsets_ = upload_nonempty(ctx, a.res_offsets, "bicluster residual offsets");
-    res_columns_ = upload_columns(ctx, a.res_columns, narrow, "bicluster residual columns");
-    res_counts_ = upload_nonempty(ctx, a.res_counts, "bicluster residual counts");
+    slice_offsets_ = upload_nonempty(ctx, a.slice_offsets, "bicluster slice offsets");
+    if (narrow_rows) {
+      slice_rows_ =
+          upload_nonempty(ctx, std::vector<std::uint8_t>(a.slice_rows.begin(), a.slice_rows.end()),
+                          "bicluster slice rows");
+    } else {
+      slice_rows_ = upload_nonempty(ctx, a.slice_rows, "bicluster slice rows");
+    }
+    if (wide_ids_) {
+      slice_codes_ = upload_nonempty(ctx, expand_ids(a), "bicluster slice ids");
+    } else {
+      slice_base_ = upload_nonempty(ctx, a.slice_base, "bicluster slice bases");
+      slice_codes_ = upload_nonempty(ctx, a.slice_codes, "bicluster slice codes");
+    }
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "bicluster light");
-    products_ = make_buffer(ctx, std::max<std::size_t>(biclusters_, 1) * sizeof(cl_float4),
-                            CL_MEM_READ_WRITE, "bicluster products");
+    products_ =
+        make_buffer(ctx, products * sizeof(cl_float4), CL_MEM_READ_WRITE, "bicluster products");
     out_ = make_buffer(ctx, std::max<std::size_t>(rows_, 1) * sizeof(Rgb), CL_MEM_WRITE_ONLY,
                        "bicluster local radiance");
     const std::uint64_t cb = narrow ? 2 : 4;
     bytes_ = a.bic_col_offsets.size() * 4 + a.bic_columns.size() * cb + a.bic_constants.size() * 2 +
-             a.row_bic_offsets.size() * 4 + a.row_bics.size() * 4 + a.res_offsets.size() * 4 +
-             a.res_columns.size() * cb + a.res_counts.size() * 2 + cols_ * sizeof(cl_float4) +
-             biclusters_ * sizeof(cl_float4) + rows_ * sizeof(Rgb);
-    set_args(phase1_, static_cast<cl_uint>(biclusters_), col_offsets_, columns_, constants_, light_,
-             products_);
-    set_args(phase2_, static_cast<cl_uint>(rows_), static_cast<float>(a.scale()), row_offsets_,
-             row_bics_, products_, res_offsets_, res_columns_, res_counts_, light_, out_);
+             a.slice_offsets.size() * 4 + a.slice_rows.size() * (narrow_rows ? 1 : 2) +
+             (wide_ids_ ? a.slice_codes.size() * 4
+                        : a.slice_base.size() * 4 + a.slice_codes.size() * 2) +
+             cols_ * sizeof(cl_float4) + products * sizeof(cl_float4) + rows_ * sizeof(Rgb);
+    set_args(phase1_, static_cast<cl_uint>(biclusters_), static_cast<cl_uint>(products - 1),
+             col_offsets_, columns_, constants_, light_, products_);
+    if (wide_ids_) {
+      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(a.slices_per_vertex()),
+               static_cast<cl_uint>(a.local_count), static_cast<float>(a.scale()), slice_offsets_,
+               slice_rows_, slice_codes_, products_, out_);
+    } else {
+      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(a.slices_per_vertex()),
+               static_cast<cl_uint>(a.local_count), static_cast<float>(a.scale()), slice_offsets_,
+               slice_rows_, slice_base_, slice_codes_, products_, out_);
+    }
   }
 
   double relight_on_device(const LightCoeffs& light) override {
@@ -95,13 +137,11 @@ class BiclusterDevice final : public DeviceRelighter {
       light_host_[k] = cl_float4{{light.values[k].x, light.values[k].y, light.values[k].z, 0.f}};
     write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
                  "bicluster light");
-    double ms = 0.0;
-    // OpenCL forbids empty launches; the in-order queue orders phase 2 after phase 1.
-    if (biclusters_ > 0) {
-      cl::Event e1 = launch(ctx_, "bicluster.phase1", phase1_, range1_);
-      ms += event_ms(ctx_, e1, "bicluster.phase1");
-    }
-    if (rows_ > 0) {
+    // Phase 1 always runs: it also writes the zero product of the last zero slot. The in-order
+    // queue orders phase 2 after it.
+    cl::Event e1 = launch(ctx_, "bicluster.phase1", phase1_, range1_);
+    double ms = event_ms(ctx_, e1, "bicluster.phase1");
+    if (slices_ > 0) {
       cl::Event e2 = launch(ctx_, "bicluster.phase2", phase2_, range2_);
       ms += event_ms(ctx_, e2, "bicluster.phase2");
     }
@@ -122,14 +162,15 @@ class BiclusterDevice final : public DeviceRelighter {
 
  private:
   ClContext& ctx_;
-  std::size_t rows_, cols_, biclusters_;
+  std::size_t rows_, cols_, biclusters_, slices_;
+  bool wide_ids_ = false;
   int dim_;
   std::size_t vertices_;
   std::vector<cl_float4> light_host_;
   cl::Kernel phase1_, phase2_;
   LaunchRange range1_, range2_;
-  cl::Buffer col_offsets_, columns_, constants_, row_offsets_, row_bics_, res_offsets_,
-      res_columns_, res_counts_, light_, products_, out_;
+  cl::Buffer col_offsets_, columns_, constants_, slice_offsets_, slice_rows_, slice_base_,
+      slice_codes_, light_, products_, out_;
   std::uint64_t bytes_ = 0;
 };
 

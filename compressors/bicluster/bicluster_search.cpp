@@ -1,10 +1,19 @@
 #include "bicluster/bicluster_search.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <chrono>
+#include <iterator>
 #include <map>
 #include <random>
+#include <unordered_map>
 
 #include "prtlab/error.h"
+#include "prtlab/log.h"
 
 namespace prt::bicluster {
 
@@ -36,13 +45,25 @@ SparseCounts Biclustering::reconstruct() const {
 
 // ---- WorkingMatrix ----
 
-WorkingMatrix::WorkingMatrix(const SparseCounts& m) : rows_(m.rows), col_rows_(m.cols) {
-  for (std::size_t j = 0; j < m.rows; ++j) {
+WorkingMatrix::WorkingMatrix(const SparseCounts& m, std::size_t row_begin, std::size_t row_end)
+    : rows_(row_end - row_begin), cols_(m.cols) {
+  PRT_CHECK(row_begin <= row_end && row_end <= m.rows, "row range [{}, {}) of {} rows", row_begin,
+            row_end, m.rows);
+  // Sized first so that each column is allocated once.
+  std::vector<std::uint32_t> col_size(m.cols, 0);
+  for (std::uint32_t i = m.offsets[row_begin]; i < m.offsets[row_end]; ++i) {
+    PRT_CHECK(m.columns[i] < m.cols, "column {} out of range", m.columns[i]);
+    if (m.values[i] != 0) ++col_size[m.columns[i]];
+  }
+  for (std::size_t k = 0; k < m.cols; ++k) cols_[k].reserve(col_size[k]);
+  for (std::size_t j = row_begin; j < row_end; ++j) {
+    auto& row = rows_[j - row_begin];
+    row.reserve(m.offsets[j + 1] - m.offsets[j]);
+    const auto local = static_cast<std::uint32_t>(j - row_begin);
     for (std::uint32_t i = m.offsets[j]; i < m.offsets[j + 1]; ++i) {
       if (m.values[i] == 0) continue;
-      PRT_CHECK(m.columns[i] < m.cols, "column {} out of range", m.columns[i]);
-      rows_[j].push_back({m.columns[i], m.values[i]});
-      col_rows_[m.columns[i]].push_back(static_cast<std::uint32_t>(j));
+      row.push_back({m.columns[i], m.values[i]});
+      cols_[m.columns[i]].push_back({local, m.values[i]});
       ++nnz_;
     }
   }
@@ -55,23 +76,63 @@ std::int32_t WorkingMatrix::get(std::uint32_t j, std::uint32_t k) const {
   return it != r.end() && it->col == k ? it->value : 0;
 }
 
-void WorkingMatrix::add(std::uint32_t j, std::uint32_t k, std::int32_t delta) {
-  if (delta == 0) return;
+int WorkingMatrix::row_add(std::uint32_t j, std::uint32_t k, std::int32_t delta) {
   auto& r = rows_[j];
   auto it = std::lower_bound(r.begin(), r.end(), k,
                              [](const Entry& e, std::uint32_t c) { return e.col < c; });
-  auto& c = col_rows_[k];
   if (it != r.end() && it->col == k) {
     it->value += delta;
-    if (it->value == 0) {
-      r.erase(it);
-      c.erase(std::lower_bound(c.begin(), c.end(), j));
-      --nnz_;
-    }
-  } else {
-    r.insert(it, {k, delta});
-    c.insert(std::lower_bound(c.begin(), c.end(), j), j);
+    if (it->value != 0) return 0;
+    r.erase(it);
+    return -1;
+  }
+  r.insert(it, {k, delta});
+  return 1;
+}
+
+void WorkingMatrix::add(std::uint32_t j, std::uint32_t k, std::int32_t delta) {
+  if (delta == 0) return;
+  const int change = row_add(j, k, delta);
+  auto& c = cols_[k];
+  auto it = std::lower_bound(c.begin(), c.end(), j,
+                             [](const ColEntry& e, std::uint32_t row) { return e.row < row; });
+  if (change > 0) {
+    c.insert(it, {j, delta});
     ++nnz_;
+  } else if (change < 0) {
+    c.erase(it);
+    --nnz_;
+  } else {
+    it->value += delta;
+  }
+}
+
+void WorkingMatrix::subtract(const Bicluster& b) {
+  for (std::uint32_t j : b.rows) {
+    for (std::size_t m = 0; m < b.cols.size(); ++m) {
+      const int change = row_add(j, b.cols[m], -b.constants[m]);
+      if (change > 0) ++nnz_;
+      if (change < 0) --nnz_;
+    }
+  }
+  // Columns: a merge of the column's sorted rows with B's sorted rows.
+  for (std::size_t m = 0; m < b.cols.size(); ++m) {
+    auto& c = cols_[b.cols[m]];
+    const std::int32_t t = b.constants[m];
+    scratch_.clear();
+    scratch_.reserve(c.size() + b.rows.size());
+    std::size_t i = 0;
+    for (std::uint32_t j : b.rows) {
+      for (; i < c.size() && c[i].row < j; ++i) scratch_.push_back(c[i]);
+      if (i < c.size() && c[i].row == j) {
+        if (c[i].value != t) scratch_.push_back({j, c[i].value - t});
+        ++i;
+      } else {
+        scratch_.push_back({j, -t});
+      }
+    }
+    scratch_.insert(scratch_.end(), c.begin() + static_cast<std::ptrdiff_t>(i), c.end());
+    c.swap(scratch_);
   }
 }
 
@@ -175,25 +236,31 @@ std::int64_t GrowState::col_influence(std::uint32_t k) const {
   return in_c_[k] ? 2 - elements : -2 + elements;
 }
 
+// The bicluster keeps l >= 1 and r >= 1 while it grows, so an insertion whose key is at most 2
+// can never have a positive influence (actual = key - 2l or key - 2r) until its key changes,
+// which refreshes it again: such entries are not pushed (most touched rows and columns hold a
+// single non-zero of the bicluster and would only fill the queues).
 void GrowState::refresh_row(std::uint32_t j) {
   const std::uint32_t v = ++row_version_[j];
   const std::int64_t base = 2 * match_[j] + 2 * nzc_[j];
   if (in_r_[j]) {
     row_delete_.push({1 - base, j, v});  // + 2l
-  } else {
+  } else if (-1 + base > 2) {
     row_insert_.push({-1 + base, j, v});  // - 2l
   }
 }
 
 void GrowState::refresh_col(std::uint32_t k) {
   const std::uint32_t v = ++col_version_[k];
-  const std::int32_t t = in_c_[k] ? constant_[k] : candidate_constant(k);
-  const std::int64_t base = 2 * (t != 0 ? hist_count(k, t) : 0) + 2 * nz_[k];
   if (in_c_[k]) {
-    col_delete_.push({2 - base, k, v});  // + 2r
-  } else {
-    col_insert_.push({-2 + base, k, v});  // - 2r
+    col_delete_.push({2 - 2 * hist_count(k, constant_[k]) - 2 * nz_[k], k, v});  // + 2r
+    return;
   }
+  // hist <= nz, so the key -2 + 2 hist + 2 nz is at most 2 when nz <= 1: skip the histogram.
+  if (nz_[k] <= 1) return;
+  const std::int32_t t = candidate_constant(k);
+  const std::int64_t key = -2 + 2 * (t != 0 ? hist_count(k, t) : 0) + 2 * nz_[k];
+  if (key > 2) col_insert_.push({key, k, v});  // - 2r
 }
 
 void GrowState::insert_row(std::uint32_t j) {
@@ -236,11 +303,11 @@ void GrowState::insert_col(std::uint32_t k) {
   constant_[k] = t;
   cols_in_.push_back(k);
   ++l_;
-  for (std::uint32_t j : m_.col_rows(k)) {
-    touch_row(j);
-    ++nzc_[j];
-    if (m_.get(j, k) == t) ++match_[j];
-    refresh_row(j);
+  for (const auto& e : m_.col(k)) {
+    touch_row(e.row);
+    ++nzc_[e.row];
+    if (e.value == t) ++match_[e.row];
+    refresh_row(e.row);
   }
   refresh_col(k);
 }
@@ -253,10 +320,10 @@ void GrowState::delete_col(std::uint32_t k) {
   constant_[k] = 0;
   cols_in_.erase(std::find(cols_in_.begin(), cols_in_.end(), k));
   --l_;
-  for (std::uint32_t j : m_.col_rows(k)) {
-    --nzc_[j];
-    if (m_.get(j, k) == t) --match_[j];
-    refresh_row(j);
+  for (const auto& e : m_.col(k)) {
+    --nzc_[e.row];
+    if (e.value == t) --match_[e.row];
+    refresh_row(e.row);
   }
   refresh_col(k);
 }
@@ -335,17 +402,19 @@ Bicluster GrowState::bicluster() const {
 
 // ---- Algorithm 1 ----
 
-Biclustering search(const SparseCounts& t, std::uint64_t seed, Progress& progress) {
-  WorkingMatrix work(t);
+Biclustering search_rows(const SparseCounts& t, std::size_t row_begin, std::size_t row_end,
+                         std::uint64_t seed, Progress& progress) {
+  WorkingMatrix work(t, row_begin, row_end);
   GrowState state(work);
   Biclustering out;
   out.rows = t.rows;
   out.cols = t.cols;
+  const auto base = static_cast<std::uint32_t>(row_begin);
   // std::mt19937_64 is specified bit for bit; the distributions are not, so indices are drawn
   // by modulo (the bias is far below anything measurable at these sizes).
   std::mt19937_64 rng(seed);
-  std::vector<std::uint32_t> order(t.rows);
-  for (std::size_t j = 0; j < t.rows; ++j) order[j] = static_cast<std::uint32_t>(j);
+  std::vector<std::uint32_t> order(work.rows());
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = static_cast<std::uint32_t>(j);
   for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
   // A zero row never enters a bicluster (its insertion influence is -1 - 2l), so once a row is
   // cleared it stays clear: visiting rows in a random order and seeding at a random non-zero of
@@ -359,19 +428,162 @@ Biclustering search(const SparseCounts& t, std::uint64_t seed, Progress& progres
       state.grow();
       if (state.gain() > 0) {
         Bicluster b = state.bicluster();
-        for (std::uint32_t bj : b.rows)
-          for (std::size_t m = 0; m < b.cols.size(); ++m) work.add(bj, b.cols[m], -b.constants[m]);
+        work.subtract(b);
+        for (std::uint32_t& bj : b.rows) bj += base;
         out.biclusters.push_back(std::move(b));
       } else {
-        out.residual.push_back({j, seed_entry.col, seed_entry.value});
+        out.residual.push_back({j + base, seed_entry.col, seed_entry.value});
         work.add(j, seed_entry.col, -seed_entry.value);
       }
       PRT_CHECK(work.nnz() < nnz_before, "a search step did not reduce nnz ({})", nnz_before);
     }
     progress.advance(1);
   }
+  return out;
+}
+
+Biclustering search(const SparseCounts& t, std::uint64_t seed, Progress& progress) {
+  Biclustering out = search_rows(t, 0, t.rows, seed, progress);
   progress.finish();
   return out;
+}
+
+std::vector<std::size_t> group_bounds(const SparseCounts& t, std::size_t rows_per_vertex,
+                                      int groups) {
+  PRT_CHECK(groups >= 1 && rows_per_vertex >= 1, "groups {} rows per vertex {}", groups,
+            rows_per_vertex);
+  PRT_CHECK(t.rows % rows_per_vertex == 0, "{} rows are not whole vertices of {} rows", t.rows,
+            rows_per_vertex);
+  const std::size_t vertices = t.rows / rows_per_vertex;
+  const std::uint64_t nnz = t.offsets.back();
+  std::vector<std::size_t> bounds{0};
+  std::size_t v = 0;
+  for (int g = 1; g < groups; ++g) {
+    // The first vertex boundary at or past g/groups of the non-zeros.
+    const std::uint64_t target =
+        nnz * static_cast<std::uint64_t>(g) / static_cast<std::uint64_t>(groups);
+    while (v < vertices && t.offsets[v * rows_per_vertex] < target) ++v;
+    bounds.push_back(v * rows_per_vertex);
+  }
+  bounds.push_back(t.rows);
+  return bounds;
+}
+
+std::uint64_t group_seed(std::uint64_t seed, int group) {
+  if (group == 0) return seed;
+  // SplitMix64 (Steele et al.) of the seed advanced by the group index.
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(group);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+Biclustering search(const SparseCounts& t, const SearchOptions& options, Progress& progress) {
+  PRT_CHECK(options.groups >= 1, "groups = {}", options.groups);
+  const auto bounds = group_bounds(t, options.rows_per_vertex, options.groups);
+  std::vector<Biclustering> parts(static_cast<std::size_t>(options.groups));
+  // One task per group; each group's search is sequential with its own seed, so the parts do
+  // not depend on which thread runs them.
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, parts.size(), 1),
+      [&](const auto& range) {
+        for (std::size_t g = range.begin(); g < range.end(); ++g) {
+          const auto start = std::chrono::steady_clock::now();
+          parts[g] = search_rows(t, bounds[g], bounds[g + 1],
+                                 group_seed(options.seed, static_cast<int>(g)), progress);
+          log_debug("bicluster group {}: rows [{}, {}), {} biclusters, {:.2f} s on thread {}", g,
+                    bounds[g], bounds[g + 1], parts[g].biclusters.size(),
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                    tbb::this_task_arena::current_thread_index());
+        }
+      },
+      tbb::simple_partitioner());
+  Biclustering out;
+  out.rows = t.rows;
+  out.cols = t.cols;
+  for (auto& p : parts) {
+    std::move(p.biclusters.begin(), p.biclusters.end(), std::back_inserter(out.biclusters));
+    out.residual.insert(out.residual.end(), p.residual.begin(), p.residual.end());
+    p = Biclustering();
+  }
+  merge_identical(out);
+  progress.finish();
+  return out;
+}
+
+namespace {
+bool disjoint_sorted(const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b) {
+  if (a.empty() || b.empty() || a.back() < b.front() || b.back() < a.front()) return true;
+  std::size_t i = 0, k = 0;
+  while (i < a.size() && k < b.size()) {
+    if (a[i] == b[k]) return false;
+    if (a[i] < b[k]) {
+      ++i;
+    } else {
+      ++k;
+    }
+  }
+  return true;
+}
+
+std::uint64_t columns_hash(const Bicluster& b) {
+  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over (column, constant) pairs
+  for (std::size_t m = 0; m < b.cols.size(); ++m) {
+    h = (h ^ b.cols[m]) * 0x100000001b3ull;
+    h = (h ^ static_cast<std::uint32_t>(b.constants[m])) * 0x100000001b3ull;
+  }
+  return h;
+}
+}  // namespace
+
+std::size_t merge_identical(Biclustering& b) {
+  // Kept biclusters by the hash of (columns, constants); a key can hold several when their rows
+  // overlap (possible within a group) or on a hash collision.
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> kept;
+  kept.reserve(b.biclusters.size());
+  std::vector<Bicluster> out;
+  out.reserve(b.biclusters.size());
+  std::size_t joins = 0;
+  for (Bicluster& bc : b.biclusters) {
+    auto& slots = kept[columns_hash(bc)];
+    bool joined = false;
+    for (std::size_t i : slots) {
+      Bicluster& into = out[i];
+      if (into.cols != bc.cols || into.constants != bc.constants ||
+          !disjoint_sorted(into.rows, bc.rows))
+        continue;
+      const std::size_t mid = into.rows.size();
+      into.rows.insert(into.rows.end(), bc.rows.begin(), bc.rows.end());
+      if (into.rows[mid - 1] > into.rows[mid])
+        std::inplace_merge(into.rows.begin(), into.rows.begin() + static_cast<std::ptrdiff_t>(mid),
+                           into.rows.end());
+      joined = true;
+      ++joins;
+      break;
+    }
+    if (joined) continue;
+    slots.push_back(out.size());
+    out.push_back(std::move(bc));
+  }
+  b.biclusters = std::move(out);
+  return joins;
+}
+
+void consolidate_residual(Biclustering& b) {
+  std::vector<Term>& terms = b.residual;
+  std::sort(terms.begin(), terms.end(), [](const Term& x, const Term& y) {
+    return x.row != y.row ? x.row < y.row : x.col < y.col;
+  });
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < terms.size();) {
+    Term sum = terms[i];
+    std::size_t e = i + 1;
+    for (; e < terms.size() && terms[e].row == sum.row && terms[e].col == sum.col; ++e)
+      sum.value += terms[e].value;
+    if (sum.value != 0) terms[w++] = sum;
+    i = e;
+  }
+  terms.resize(w);
 }
 
 }  // namespace prt::bicluster

@@ -64,28 +64,42 @@ struct Biclustering {
   friend bool operator==(const Biclustering&, const Biclustering&) = default;
 };
 
-/// The residual matrix T_c, editable: rows of (column, value) and per-column row lists, both
-/// sorted, so an entry is found by binary search and a column's rows are listed directly.
+/// The residual matrix T_c, editable: rows of (column, value) and columns of (row, value), both
+/// sorted, so an entry is found by binary search and a column's rows and values are listed
+/// directly. Built from a contiguous row range of a SparseCounts, renumbered from 0, so a group
+/// of rows is searched with memory proportional to its size.
 class WorkingMatrix {
  public:
   struct Entry {
     std::uint32_t col;
     std::int32_t value;
   };
-  explicit WorkingMatrix(const SparseCounts& m);
+  struct ColEntry {
+    std::uint32_t row;
+    std::int32_t value;
+  };
+  explicit WorkingMatrix(const SparseCounts& m) : WorkingMatrix(m, 0, m.rows) {}
+  /// Rows [row_begin, row_end) of m as rows 0 .. row_end - row_begin - 1.
+  WorkingMatrix(const SparseCounts& m, std::size_t row_begin, std::size_t row_end);
 
   std::size_t rows() const { return rows_.size(); }
-  std::size_t cols() const { return col_rows_.size(); }
+  std::size_t cols() const { return cols_.size(); }
   std::uint64_t nnz() const { return nnz_; }
   std::span<const Entry> row(std::size_t j) const { return rows_[j]; }
-  std::span<const std::uint32_t> col_rows(std::size_t k) const { return col_rows_[k]; }
+  std::span<const ColEntry> col(std::size_t k) const { return cols_[k]; }
   std::int32_t get(std::uint32_t j, std::uint32_t k) const;
   /// T_c[j, k] += delta (keeps both indexes sorted and zeros out of them).
   void add(std::uint32_t j, std::uint32_t k, std::int32_t delta);
+  /// T_c[rows, cols] -= B: one pass over each of B's rows and columns (B's rows and columns
+  /// sorted), instead of a search and a shift of the column per element.
+  void subtract(const Bicluster& b);
 
  private:
+  // Row j's entry for column k += delta; returns +1 / -1 / 0 as an entry appears / vanishes.
+  int row_add(std::uint32_t j, std::uint32_t k, std::int32_t delta);
   std::vector<std::vector<Entry>> rows_;
-  std::vector<std::vector<std::uint32_t>> col_rows_;
+  std::vector<std::vector<ColEntry>> cols_;
+  std::vector<ColEntry> scratch_;
   std::uint64_t nnz_ = 0;
 };
 
@@ -161,8 +175,44 @@ class GrowState {
   Heap row_insert_, row_delete_, col_insert_, col_delete_;
 };
 
+/// How the rows are split for a parallel search.
+struct SearchOptions {
+  std::uint64_t seed = 1;
+  /// Number of row groups searched independently (>= 1). Groups are contiguous ranges of whole
+  /// vertices (boundaries at multiples of rows_per_vertex) holding about nnz / groups non-zeros
+  /// each; group g is searched with group_seed(seed, g). The result depends on (seed, groups)
+  /// and T only, never on the thread count.
+  int groups = 1;
+  std::size_t rows_per_vertex = 1;  ///< M; 1 lets a group boundary fall between any rows
+};
+
+/// The groups' row boundaries: groups + 1 non-decreasing values from 0 to t.rows (a group may
+/// be empty when one vertex holds more than its share).
+std::vector<std::size_t> group_bounds(const SparseCounts& t, std::size_t rows_per_vertex,
+                                      int groups);
+/// Seed of group g: `seed` itself for group 0 (so groups = 1 is the single search), a SplitMix64
+/// hash of (seed, g) for the others.
+std::uint64_t group_seed(std::uint64_t seed, int group);
+
 /// Algorithm 1 over `t` (deterministic for a seed). Progress counts visited rows (its total
-/// should be t.rows, as the compression stage sets it).
+/// should be t.rows, as the compression stage sets it). Equivalent to search with one group,
+/// without the merge.
 Biclustering search(const SparseCounts& t, std::uint64_t seed, Progress& progress);
+
+/// Algorithm 1 over rows [row_begin, row_end) of `t` only; the result's rows are global.
+Biclustering search_rows(const SparseCounts& t, std::size_t row_begin, std::size_t row_end,
+                         std::uint64_t seed, Progress& progress);
+
+/// The grouped search: the groups run in parallel (TBB), their results are concatenated in
+/// group order and merge_identical() joins the pieces of biclusters cut by group boundaries.
+Biclustering search(const SparseCounts& t, const SearchOptions& options, Progress& progress);
+
+/// Joins biclusters with identical columns and constants and disjoint rows (rows unioned, at
+/// the position of the first): each join saves 2l - 1 FLOPs and changes no product. Returns the
+/// number of joins.
+std::size_t merge_identical(Biclustering& b);
+
+/// Sums residual terms at the same position and drops zeros (terms sorted by row, then column).
+void consolidate_residual(Biclustering& b);
 
 }  // namespace prt::bicluster

@@ -3,6 +3,8 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <set>
 
 #include "prtlab/data_paths.h"
@@ -10,6 +12,7 @@
 #include "prtlab/log.h"
 #include "prtlab/mesh_io.h"
 #include "prtlab/procedural_shapes.h"
+#include "prtlab/uv_mapping.h"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -133,6 +136,48 @@ Mesh make_procedural(const fs::path& file, const ScenePart& part, const std::str
                        count("rings", 8));
 }
 
+/// Generated UVs split vertices along chart borders. Charting the full-resolution mesh and
+/// decimating afterwards pins the seams (meshoptimizer collapses seam vertices only along the
+/// seam), which spends most of the vertex budget on seams; so the mesh is resampled first and
+/// charted after, with the resampling target lowered by the seam copies so that the charted
+/// mesh lands slightly above the target; a last, small decimation of the charted mesh (a few
+/// interior collapses, which keep the planar UVs exact) removes the rest.
+Mesh resample_with_generated_uvs(const Mesh& source, std::optional<std::size_t> target,
+                                 const std::string& part_name) {
+  UvAtlasReport report;
+  if (!target) {
+    Mesh out = generate_uvs(source, {}, &report);
+    log_debug("part '{}': generated UVs, {} charts, {} -> {} vertices", part_name, report.charts,
+              report.input_vertices, report.output_vertices);
+    return out;
+  }
+  const auto want = static_cast<double>(*target);
+  constexpr double kAim = 1.01, kWindow = 1.04;  // charted count wanted in [want, 1.04 want]
+  double base = want / 1.25;  // charting adds about a quarter in seam copies on scanned meshes
+  Mesh above;                 // the smallest charted mesh at or above the target so far
+  for (int iter = 0; iter < 8; ++iter) {
+    const auto base_count = static_cast<std::size_t>(std::max(4.0, std::round(base)));
+    Mesh charted = generate_uvs(
+        base_count == source.vertex_count() ? source : resample_to_vertex_count(source, base_count),
+        {}, &report);
+    const double got = static_cast<double>(charted.vertex_count());
+    log_debug("part '{}': resampled to {}, {} charts, {} vertices with seams (target {})",
+              part_name, base_count, report.charts, got, want);
+    if (got >= want && (above.positions.empty() || charted.vertex_count() < above.vertex_count()))
+      above = std::move(charted);
+    if (got >= want && got <= kWindow * want) break;
+    // Above the source's count resample_to_vertex_count subdivides first (bunny-48k).
+    base *= kAim * want / got;
+  }
+  if (above.positions.empty())
+    throw ParameterError(
+        fmt::format("part '{}': cannot reach {} vertices with generated UVs (the mesh has {}; "
+                    "the seam copies of the charts did not converge)",
+                    part_name, *target, source.vertex_count()));
+  if (above.vertex_count() == *target) return above;
+  return decimate_to_vertex_count(above, *target);
+}
+
 }  // namespace
 
 SceneDesc parse_scene(const fs::path& file) {
@@ -146,7 +191,7 @@ SceneDesc parse_scene(const fs::path& file) {
   }
   reject_unknown_keys(file, root,
                       {"name", "description", "local_grid", "cubemap_resolution", "supersampling",
-                       "target_vertices", "part"},
+                       "target_vertices", "part", "view"},
                       "the scene");
   SceneDesc d;
   d.file = file;
@@ -176,8 +221,8 @@ SceneDesc parse_scene(const fs::path& file) {
     const auto* t = node.as_table();
     if (!t) throw InputError(file, "each [[part]] must be a table");
     reject_unknown_keys(file, *t,
-                        {"name", "mesh", "btf", "uv_scale", "target_vertices", "transform",
-                         "normalize", "params", "instance"},
+                        {"name", "mesh", "btf", "uv_scale", "uv_mapping", "target_vertices",
+                         "transform", "normalize", "params", "instance"},
                         "a [[part]]");
     const toml::node_view<const toml::node> p{*t};
     ScenePart part;
@@ -185,9 +230,33 @@ SceneDesc parse_scene(const fs::path& file) {
                     .value_or(fmt::format("part{}", d.parts.size()));
     part.mesh = require<std::string>(file, p["mesh"], "mesh");
     part.btf = optional_value<std::string>(file, p["btf"], "btf").value_or("lambert");
-    part.uv_scale = optional_value<double>(file, p["uv_scale"], "uv_scale").value_or(1.0);
-    if (!(part.uv_scale > 0))
+    if (p["uv_scale"].is_array()) {
+      const auto* arr = p["uv_scale"].as_array();
+      const auto su = arr->size() == 2 ? (*arr)[0].value<double>() : std::nullopt;
+      const auto sv = arr->size() == 2 ? (*arr)[1].value<double>() : std::nullopt;
+      if (!su || !sv)
+        throw InputError(
+            file, fmt::format("part '{}': uv_scale must be a number or [su, sv]", part.name));
+      part.uv_scale = *su;
+      part.uv_scale_v = *sv;
+    } else {
+      part.uv_scale = optional_value<double>(file, p["uv_scale"], "uv_scale").value_or(1.0);
+      part.uv_scale_v = part.uv_scale;
+    }
+    if (!(part.uv_scale > 0) || !(part.uv_scale_v > 0) || !std::isfinite(part.uv_scale) ||
+        !std::isfinite(part.uv_scale_v))
       throw InputError(file, fmt::format("part '{}': uv_scale must be positive", part.name));
+    const std::string mapping =
+        optional_value<std::string>(file, p["uv_mapping"], "uv_mapping").value_or("auto");
+    if (mapping == "auto")
+      part.uv_mapping = UvMapping::kAuto;
+    else if (mapping == "mesh")
+      part.uv_mapping = UvMapping::kMesh;
+    else if (mapping == "planar")
+      part.uv_mapping = UvMapping::kPlanar;
+    else
+      throw InputError(file, fmt::format("part '{}': uv_mapping = '{}' (valid: auto, mesh, planar)",
+                                         part.name, mapping));
     part.normalize = optional_value<bool>(file, p["normalize"], "normalize").value_or(false);
     if (auto tv = optional_value<std::int64_t>(file, p["target_vertices"], "target_vertices")) {
       if (*tv < 4)
@@ -230,6 +299,36 @@ SceneDesc parse_scene(const fs::path& file) {
     }
     d.parts.push_back(std::move(part));
   }
+  if (const auto* views = root["view"].as_array()) {
+    for (const auto& node : *views) {
+      const auto* t = node.as_table();
+      if (!t) throw InputError(file, "each [[view]] must be a table");
+      const int line = static_cast<int>(t->source().begin.line);
+      reject_unknown_keys(file, *t, {"name", "eye", "from", "target", "up", "fov", "fill"},
+                          "a [[view]]");
+      const toml::node_view<const toml::node> v{*t};
+      ViewPreset view;
+      view.name = require<std::string>(file, v["name"], "name");
+      for (const auto& other : d.views)
+        if (other.name == view.name)
+          throw InputError(file,
+                           fmt::format("line {}: view '{}' is defined twice", line, view.name));
+      if (v["eye"]) view.eye = vec3(file, v["eye"], "eye", Vec3d(0.0));
+      if (v["from"]) view.from = vec3(file, v["from"], "from", Vec3d(0.0));
+      if (v["target"]) view.target = vec3(file, v["target"], "target", Vec3d(0.0));
+      view.up = vec3(file, v["up"], "up", view.up);
+      view.fov_y_deg = optional_value<double>(file, v["fov"], "fov").value_or(view.fov_y_deg);
+      view.fill = optional_value<double>(file, v["fill"], "fill").value_or(view.fill);
+      try {
+        view.validate();
+      } catch (const ParameterError& e) {
+        throw InputError(file, fmt::format("line {}: {}", line, e.what()));
+      }
+      d.views.push_back(std::move(view));
+    }
+  } else if (root["view"]) {
+    throw InputError(file, "'view' must be an array of tables ([[view]])");
+  }
   if (d.target_vertices && d.parts.size() != 1)
     throw InputError(
         file, "a scene-level 'target_vertices' needs exactly one part (set it per part instead)");
@@ -253,11 +352,21 @@ Scene build_scene(const SceneDesc& desc) {
     }
     auto target = part.target_vertices;
     if (!target && desc.target_vertices) target = desc.target_vertices;
-    if (target && *target != m.vertex_count()) m = resample_to_vertex_count(m, *target);
+    if (part.uv_mapping == UvMapping::kMesh && !m.has_uvs())
+      throw InputError(desc.file, fmt::format("part '{}': uv_mapping = \"mesh\" but {} has no UVs "
+                                              "(use \"auto\" or \"planar\")",
+                                              part.name, part.mesh));
+    if (part.uv_mapping == UvMapping::kPlanar ||
+        (part.uv_mapping == UvMapping::kAuto && !m.has_uvs())) {
+      m = resample_with_generated_uvs(m, target, part.name);
+    } else if (target && *target != m.vertex_count()) {
+      m = resample_to_vertex_count(m, *target);
+    }
     if (part.normalize) normalize_to_unit_box(m, /*on_ground=*/true);
     apply_transform(m, part.transform);
-    if (part.uv_scale != 1.0)
-      for (auto& uv : m.uvs) uv *= static_cast<float>(part.uv_scale);
+    if (part.uv_scale != 1.0 || part.uv_scale_v != 1.0)
+      for (auto& uv : m.uvs)
+        uv *= Vec2(static_cast<float>(part.uv_scale), static_cast<float>(part.uv_scale_v));
     // Loaded meshes get smooth normals here; procedural shapes keep their analytic ones
     // (recomputing would bend normals at UV-seam duplicates and box edges).
     if (m.normals.size() != m.vertex_count()) compute_smooth_normals(m);
@@ -276,6 +385,23 @@ Scene build_scene(const SceneDesc& desc) {
     }
   }
   return scene;
+}
+
+ViewPreset scene_view(const SceneDesc& desc, std::string_view name) {
+  if (name.empty()) return desc.views.empty() ? automatic_view() : desc.views.front();
+  for (const auto& v : desc.views)
+    if (v.name == name) return v;
+  std::string names;
+  for (const auto& v : desc.views) names += (names.empty() ? "" : ", ") + v.name;
+  throw ParameterError(
+      fmt::format("{}: no view '{}' (presets: {})", desc.file.string(), name,
+                  names.empty() ? "none; the automatic view is the default" : names));
+}
+
+Camera scene_camera(const Scene& scene, std::string_view view, const CameraOverrides& overrides) {
+  const Camera framed = resolve_view(scene_view(scene.desc, view), scene.mesh.positions,
+                                     overrides.width.value_or(640), overrides.height.value_or(480));
+  return apply_overrides(framed, overrides);
 }
 
 }  // namespace prt

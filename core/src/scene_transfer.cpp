@@ -3,6 +3,9 @@
 #include <chrono>
 #include <fstream>
 #include <iterator>
+#include <sstream>
+
+#include <toml++/toml.h>
 
 #include "prtlab/data_paths.h"
 #include "prtlab/error.h"
@@ -21,13 +24,29 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Camera presets do not change T, so a view-only edit of the scene file must not invalidate the
+// transfer cache: hash the parsed file with its [[view]] tables removed. The re-serialised TOML
+// is canonical for the same content (toml++ prints keys in sorted order).
+std::string scene_text_without_views(const std::filesystem::path& file) {
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(file, std::string("TOML parse error: ") + std::string(e.description()));
+  }
+  root.erase("view");
+  std::ostringstream os;
+  os << root;
+  return os.str();
+}
+
 }  // namespace
 
 Hash128 scene_input_hash(const SceneDesc& desc) {
   Hasher h;
   h.add("prtlab-scene-inputs").add(kMeshPipelineVersion);
-  const auto scene_bytes = read_bytes(desc.file);
-  h.add_array(std::span<const char>(scene_bytes));
+  const std::string scene_text = scene_text_without_views(desc.file);
+  h.add_array(std::span<const char>(scene_text.data(), scene_text.size()));
   for (const auto& part : desc.parts) {
     if (part.mesh.starts_with("procedural:")) continue;
     const auto bytes = read_bytes(resolve_mesh(part.mesh));

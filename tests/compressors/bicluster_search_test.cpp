@@ -213,15 +213,28 @@ void expect_exact(const TransferMatrix& t, const CompressedTransfer& ct) {
   const auto& bt = dynamic_cast<const BiclusterTransfer&>(ct);
   EXPECT_EQ(reconstruct(bt.arrays()), counts_of(t));
   EXPECT_LE(ct.flops_per_relight(), 2.0 * static_cast<double>(t.nnz()));
-  // FLOPs = sum W(B_i) + 2 per residual term, recounted from the arrays.
+  // FLOPs = sum W(B_i) (residual terms as 1x1 biclusters), recounted from the arrays.
   const BiclusterArrays& a = bt.arrays();
-  double flops = 2.0 * static_cast<double>(a.res_columns.size());
-  std::vector<std::int64_t> rows_of(a.bicluster_count(), 0);
-  for (std::uint32_t i : a.row_bics) ++rows_of[i];
-  for (std::size_t i = 0; i < a.bicluster_count(); ++i)
+  const std::size_t nb = a.bicluster_count();
+  std::vector<std::int64_t> rows_of(nb, 0);
+  for (std::size_t s = 0; s < a.slice_count(); ++s)
+    for (int lane = 0; lane < kSliceRows; ++lane)
+      a.for_each_id(s, lane, [&](std::uint32_t i) { ++rows_of.at(i); });
+  double flops = 0;
+  for (std::size_t i = 0; i < nb; ++i) {
+    if (i % kZeroStride == 0) {
+      EXPECT_EQ(rows_of[i], 0) << "zero slot " << i << " has rows";
+      EXPECT_EQ(a.bic_col_offsets[i + 1], a.bic_col_offsets[i]) << "zero slot " << i;
+      continue;
+    }
+    EXPECT_GT(rows_of[i], 0) << "bicluster " << i << " has no row";
     flops +=
         static_cast<double>(rows_of[i] + 2 * (a.bic_col_offsets[i + 1] - a.bic_col_offsets[i]) - 1);
+  }
   EXPECT_EQ(ct.flops_per_relight(), flops);
+  // The padding and jumps are small: slices of rows sorted by length.
+  EXPECT_LE(static_cast<double>(a.slice_codes.size() - a.incidences()),
+            0.5 * static_cast<double>(a.slice_codes.size()) + 64);
   std::uint64_t bytes = 4;
   for (const auto& c : ct.storage().components)
     if (c.name != "scale") bytes += c.bytes;

@@ -4,8 +4,9 @@
 //
 // Checks, per backend and case:
 //   - relight vs the exact product T L accumulated in double, for two lights, within the
-//     backend's declared_error_bound (a lossless backend declares 0 and gets 1e-6 relative for
-//     float rounding), both as relative L2 and as max-norm error;
+//     backend's declared_error_bound in its declared_error_norm (relative L2 or L1); a lossless
+//     result declares 0 and gets 1e-6 relative for float rounding, as relative L2 and as
+//     max-norm error. A backend registered as lossless must declare 0 at its defaults;
 //   - the OpenCL relight vs the C++ reference within 1e-5 relative (skipped with a message
 //     when the machine has no OpenCL device). Parameters named "opencl_*" may only change the
 //     device path, so the check runs over every combination of their values (string choices,
@@ -165,6 +166,33 @@ bool bit_identical(const LocalRadiance& a, const LocalRadiance& b) {
           std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(Rgb)) == 0);
 }
 
+// sum |a - ref| / sum |ref| over all rows and channels: the norm of the lossy bicluster bound
+// (for T, L >= 0 a per-column L1 budget bounds it; see CompressedTransfer::ErrorNorm).
+double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference) {
+  PRT_CHECK(a.values.size() == reference.values.size(), "sizes {} vs {}", a.values.size(),
+            reference.values.size());
+  double diff = 0, ref = 0;
+  for (std::size_t i = 0; i < a.values.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      diff += std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]);
+      ref += std::abs(static_cast<double>(reference.values[i][c]));
+    }
+  }
+  return ref > 0 ? diff / ref : diff;
+}
+
+// The error in the norm the backend declares its bound in.
+double declared_norm_error(const CompressedTransfer& ct, const LocalRadiance& a,
+                           const LocalRadiance& reference) {
+  switch (ct.declared_error_norm()) {
+    case CompressedTransfer::ErrorNorm::kRelativeL1:
+      return relative_l1_error(a, reference);
+    case CompressedTransfer::ErrorNorm::kRelativeL2:
+      break;
+  }
+  return relative_l2_error(a, reference);
+}
+
 ::testing::AssertionResult within(const char* what, double error, double tolerance) {
   if (error <= tolerance) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure()
@@ -298,8 +326,10 @@ TEST_P(Conformance, RelightMatchesTheExactProductWithinTheDeclaredBound) {
     ASSERT_EQ(out.dim, data().transfer.local_count());
     ASSERT_EQ(out.vertices, data().transfer.vertex_count());
     ASSERT_EQ(out.values.size(), data().transfer.rows());
-    EXPECT_TRUE(within("relative L2", relative_l2_error(out, exact), tolerance));
+    const std::string norm(to_string(ct.declared_error_norm()));
+    EXPECT_TRUE(within(norm.c_str(), declared_norm_error(ct, out, exact), tolerance));
     if (bound == 0) {
+      EXPECT_TRUE(within("relative L2", relative_l2_error(out, exact), kLosslessTolerance));
       EXPECT_TRUE(within("max-norm", max_relative_error(out, exact), kLosslessTolerance));
     }
     if (!non_empty()) {
@@ -355,6 +385,7 @@ TEST_P(Conformance, SaveLoadRoundTripIsIdentical) {
   EXPECT_TRUE(same_storage(loaded->storage(), ct.storage()));
   EXPECT_EQ(loaded->flops_per_relight(), ct.flops_per_relight());
   EXPECT_EQ(loaded->declared_error_bound(), ct.declared_error_bound());
+  EXPECT_EQ(loaded->declared_error_norm(), ct.declared_error_norm());
   EXPECT_EQ(loaded->output_basis(), ct.output_basis());
   for (std::size_t l = 0; l < data().lights.size(); ++l) {
     SCOPED_TRACE(::testing::Message() << "light " << l);

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "prtlab/error.h"
 #include "prtlab/random_transfer.h"
@@ -134,6 +135,28 @@ TEST_F(TransferFiles, SecondPrecomputeIsACacheHitWithTheSameMatrix) {
   EXPECT_NE(with_sh.key, first.key);
   ASSERT_TRUE(with_sh.result.sh.has_value());
   EXPECT_TRUE(with_sh.result.transfer == first.result.transfer);
+}
+
+// Camera presets do not change T: editing only [[view]] tables keeps the cache key, while any
+// edit that changes the transfer (here the cubemap resolution) changes it.
+TEST_F(TransferFiles, ViewOnlyEditKeepsTheSceneInputHash) {
+  const fs::path src = fs::path(PRTLAB_SOURCE_DIR) / "scenes" / "tiny-sphere-plane.toml";
+  std::ifstream in(src);
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const auto write = [&](const std::string& name, const std::string& body) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << body;
+    return parse_scene(p);
+  };
+  const Hash128 base = scene_input_hash(write("a.toml", text));
+  const Hash128 more_views =
+      scene_input_hash(write("b.toml", text + "\n[[view]]\nname = \"side\"\nfrom = [1.0, 0.2, 0.0]\n"));
+  EXPECT_EQ(base, more_views);
+  std::string finer = text;
+  const auto at = finer.find("cubemap_resolution = 8");
+  ASSERT_NE(at, std::string::npos);
+  finer.replace(at, 22, "cubemap_resolution = 6");
+  EXPECT_NE(base, scene_input_hash(write("c.toml", finer)));
 }
 
 }  // namespace

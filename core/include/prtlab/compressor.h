@@ -11,6 +11,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "prtlab/cubemap.h"
@@ -76,9 +77,14 @@ class CompressedTransfer {
   /// FLOPs of one relight for one colour channel, counted as the papers count them
   /// (a multiply-add is 2; a bicluster costs r + 2l - 1).
   virtual double flops_per_relight() const = 0;
-  /// The relative L2 error of relight() vs the exact product that the backend guarantees
-  /// for any non-negative light; 0 for lossless backends (then only float rounding remains).
+  /// The norm declared_error_bound() is measured in, relative to the exact product T L over
+  /// all rows and colour channels: ||T~ L - T L|| / ||T L||.
+  enum class ErrorNorm { kRelativeL2, kRelativeL1 };
+  /// The relative error of relight() vs the exact product that the backend guarantees for any
+  /// non-negative light, in declared_error_norm(); 0 for lossless results (then only float
+  /// rounding remains).
   virtual double declared_error_bound() const = 0;
+  virtual ErrorNorm declared_error_norm() const { return ErrorNorm::kRelativeL2; }
   /// Basis of the LocalRadiance relight() produces.
   virtual RadianceBasis output_basis() const { return RadianceBasis::kPixel; }
 
@@ -94,6 +100,11 @@ class CompressedTransfer {
   /// Serialise the backend's state (the registry writes the header and backend name).
   virtual void save(ArchiveWriter& archive) const = 0;
 };
+
+/// "relative_l2" / "relative_l1" (the JSON and report spelling).
+inline std::string_view to_string(CompressedTransfer::ErrorNorm n) {
+  return n == CompressedTransfer::ErrorNorm::kRelativeL1 ? "relative_l1" : "relative_l2";
+}
 
 class Compressor {
  public:

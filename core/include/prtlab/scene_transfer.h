@@ -17,7 +17,7 @@
 
 namespace prt {
 
-inline constexpr std::uint32_t kMeshPipelineVersion = 1;
+inline constexpr std::uint32_t kMeshPipelineVersion = 2;
 
 struct PrecomputeOptions {
   int sh_order = 0;  ///< 0: no SH transfer

@@ -1,0 +1,179 @@
+// Backend `bicluster`, stored layout (bicluster.h): SELL-4 slices with u16 id deltas and zero
+// slots. With more than 2^16 biclusters a lane must cross gaps through zero slots and pad on the
+// slot above its last id; the arrays must still stand for exactly the packed biclusters, relight
+// them (C++ and OpenCL), survive save/load, and the loader must refuse inconsistent arrays.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "bicluster/bicluster.h"
+#include "prtlab/archive.h"
+#include "prtlab/cl_context.h"
+#include "prtlab/compressor_registry.h"
+#include "prtlab/error.h"
+#include "prtlab/random_transfer.h"
+#include "prtlab/transfer_matrix.h"
+
+namespace prt::bicluster {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Fixture {
+  TransferMatrix t;
+  Biclustering b;
+};
+
+// Every entry of a random T as a 1x1 term (~80,000 of them, so ids pass 2^16), plus biclusters
+// joining a row of the first vertex to rows of the last ones: those get small ids (first use in
+// vertex 0) next to the last vertices' large ids, a gap of more than 2^16 in their lanes.
+Fixture many_biclusters() {
+  Fixture f;
+  f.t = random_transfer(3, RandomTransferSpec{300, 4, 8, 2, 0.7, {}});
+  const SparseCounts c = counts_of(f.t);
+  f.b.rows = c.rows;
+  f.b.cols = c.cols;
+  for (std::size_t j = 0; j < c.rows; ++j)
+    for (std::uint32_t i = c.offsets[j]; i < c.offsets[j + 1]; ++i)
+      f.b.residual.push_back({static_cast<std::uint32_t>(j), c.columns[i], c.values[i]});
+  const auto last = static_cast<std::uint32_t>(c.rows - 1);
+  for (std::uint32_t k = 0; k < 6; ++k)
+    f.b.biclusters.push_back(Bicluster{{k, last - 3 * k, last - 16 - k}, {k, k + 9}, {2, -1}});
+  return f;
+}
+
+TEST(BiclusterLayout, ZeroSlotsCarryLanesAcrossLargeGaps) {
+  const Fixture f = many_biclusters();
+  const BiclusterArrays a = pack(f.b, f.t);
+  ASSERT_GT(a.bicluster_count(), 2u * kZeroStride);
+  EXPECT_EQ(reconstruct(a), f.b.reconstruct());
+  for (std::size_t i = 0; i < a.bicluster_count(); i += kZeroStride)
+    EXPECT_EQ(a.bic_col_offsets[i + 1], a.bic_col_offsets[i]) << "zero slot " << i;
+  EXPECT_EQ(a.real_bicluster_count(), f.b.biclusters.size() + f.b.residual.size());
+  // Some lane stepped on a zero slot in the middle of its ids (a gap above 2^16).
+  bool crossed = false;
+  for (std::size_t s = 0; s < a.slice_count() && !crossed; ++s) {
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      std::uint32_t id = a.slice_base[s];
+      bool zero_seen = false;
+      for (std::uint32_t q = a.slice_offsets[s] + lane; q < a.slice_offsets[s + 1];
+           q += kSliceRows) {
+        id += a.slice_codes[q];
+        if (id % kZeroStride == 0) {
+          zero_seen = true;
+        } else if (zero_seen) {
+          crossed = true;
+        }
+        EXPECT_LT(id, a.product_count());
+      }
+    }
+  }
+  EXPECT_TRUE(crossed) << "the fixture should force a lane through a zero slot";
+
+  // FLOPs: sum W over the packed biclusters (1x1 terms 2 each).
+  std::int64_t flops = 2 * static_cast<std::int64_t>(f.b.residual.size());
+  for (const auto& bc : f.b.biclusters) flops += bc.cost();
+  const BiclusterTransfer ct(a);
+  EXPECT_EQ(ct.flops_per_relight(), static_cast<double>(flops));
+
+  // Relight against the double product of the packed counts.
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  LightCoeffs light{"pixel", std::vector<Rgb>(f.t.cols())};
+  for (Rgb& v : light.values) v = Rgb(u(rng), u(rng), u(rng));
+  const SparseCounts packed = f.b.reconstruct();
+  LocalRadiance out;
+  ct.relight(light, out);
+  double largest = 0, worst = 0;
+  std::vector<Vec3d> exact(packed.rows, Vec3d(0.0));
+  for (std::size_t j = 0; j < packed.rows; ++j) {
+    for (std::uint32_t i = packed.offsets[j]; i < packed.offsets[j + 1]; ++i)
+      exact[j] += packed.values[i] * a.scale() * Vec3d(light.values[packed.columns[i]]);
+    for (int c = 0; c < 3; ++c) largest = std::max(largest, std::abs(exact[j][c]));
+  }
+  for (std::size_t j = 0; j < packed.rows; ++j)
+    for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(out.values[j][c] - exact[j][c]));
+  EXPECT_LT(worst, 1e-6 * largest);
+
+  if (ClContext* ctx = default_context()) {
+    auto device = ct.upload(*ctx);
+    LocalRadiance gpu;
+    device->relight(light, gpu);
+    double diff = 0;
+    for (std::size_t j = 0; j < packed.rows; ++j)
+      for (int c = 0; c < 3; ++c)
+        diff = std::max(diff, static_cast<double>(std::abs(gpu.values[j][c] - out.values[j][c])));
+    EXPECT_LT(diff, 1e-5 * largest) << "OpenCL vs C++ on " << ctx->info().label();
+  }
+}
+
+TEST(BiclusterLayout, SlicesHoldRowsSortedByLengthWithLittlePadding) {
+  const TransferMatrix t = random_transfer(12, RandomTransferSpec{40, 4, 4, 2, 0.6, {}});
+  const auto ct =
+      CompressorRegistry::instance()
+          .create("bicluster", {{"seed", "2"}})
+          ->compress({t, nullptr, CubemapLayout(4), HemisphereGrid(4)}, Progress::null());
+  const BiclusterArrays& a = dynamic_cast<const BiclusterTransfer&>(*ct).arrays();
+  EXPECT_EQ(reconstruct(a), counts_of(t));
+  EXPECT_EQ(a.slice_count(), t.vertex_count() * 4);  // M = 16: four slices of four rows
+  std::size_t previous_longest = 0;
+  for (std::size_t s = 0; s < a.slice_count(); ++s) {
+    std::size_t lengths[kSliceRows] = {};
+    for (int lane = 0; lane < kSliceRows; ++lane)
+      a.for_each_id(s, lane, [&](std::uint32_t) { ++lengths[lane]; });
+    for (int lane = 1; lane < kSliceRows; ++lane)
+      EXPECT_GE(lengths[lane - 1], lengths[lane]) << "slice " << s << " lane " << lane;
+    if (s % 4 != 0) {
+      EXPECT_LE(lengths[0], previous_longest) << "slice " << s << " of its vertex";
+    }
+    previous_longest = lengths[kSliceRows - 1];
+  }
+  const double padding = 1.0 - static_cast<double>(a.incidences()) / a.slice_codes.size();
+  EXPECT_LT(padding, 0.25) << "padding share of the slice codes";
+}
+
+std::unique_ptr<CompressedTransfer> save_and_load(const BiclusterArrays& a) {
+  const fs::path path =
+      fs::temp_directory_path() / ("bicluster_layout_" + std::to_string(::getpid()) + ".prt");
+  save_compressed(BiclusterTransfer(a), path);
+  struct Remove {
+    fs::path p;
+    ~Remove() { fs::remove(p); }
+  } remove{path};
+  return load_compressed(path);
+}
+
+TEST(BiclusterLayout, SaveLoadKeepsTheArraysAndTheLoaderRefusesInconsistentOnes) {
+  const Fixture f = many_biclusters();
+  const BiclusterArrays a = pack(f.b, f.t);
+  const auto loaded = save_and_load(a);
+  const BiclusterArrays& l = dynamic_cast<const BiclusterTransfer&>(*loaded).arrays();
+  EXPECT_EQ(l.bic_col_offsets, a.bic_col_offsets);
+  EXPECT_EQ(l.bic_columns, a.bic_columns);
+  EXPECT_EQ(l.bic_constants, a.bic_constants);
+  EXPECT_EQ(l.slice_offsets, a.slice_offsets);
+  EXPECT_EQ(l.slice_rows, a.slice_rows);
+  EXPECT_EQ(l.slice_base, a.slice_base);
+  EXPECT_EQ(l.slice_codes, a.slice_codes);
+
+  BiclusterArrays beyond = a;  // a lane reading past the last bicluster
+  const auto nb = static_cast<std::uint32_t>(a.bicluster_count());
+  beyond.slice_base.back() = nb;
+  beyond.slice_codes[beyond.slice_offsets[beyond.slice_count() - 1]] =
+      (nb + 1) % kZeroStride ? 1 : 2;
+  EXPECT_THROW(save_and_load(beyond), InputError);
+
+  BiclusterArrays twice = a;  // a row listed in two lanes, another in none
+  twice.slice_rows[1] = twice.slice_rows[0];
+  EXPECT_THROW(save_and_load(twice), InputError);
+
+  BiclusterArrays slot = a;  // zero slot 0 takes bicluster 1's columns
+  slot.bic_col_offsets[1] = slot.bic_col_offsets[2];
+  EXPECT_THROW(save_and_load(slot), InputError);
+}
+
+}  // namespace
+}  // namespace prt::bicluster

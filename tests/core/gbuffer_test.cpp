@@ -1,0 +1,236 @@
+#include "prtlab/gbuffer.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "prtlab/error.h"
+#include "prtlab/mesh_processing.h"
+#include "prtlab/procedural_shapes.h"
+
+namespace prt {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr int kSegments = 96, kRings = 48;
+
+Vec3d view_local(const GBuffer& g, std::size_t i) {
+  return {g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2]};
+}
+Vec3d direction(const GBuffer& g, std::size_t i) {
+  return {g.direction[4 * i], g.direction[4 * i + 1], g.direction[4 * i + 2]};
+}
+
+/// A unit sphere at the origin seen head-on from +z, filling about 60% of the image height.
+/// Odd image sides put the centre of the middle pixel on the optical axis.
+struct SphereView {
+  Mesh mesh = make_sphere(1.0, kSegments, kRings);
+  Camera cam;
+  GBuffer g;
+  SphereView() {
+    cam.eye = {0, 0, 4};
+    cam.target = {0, 0, 0};
+    cam.fov_y_deg = 2.0 * std::asin(1.0 / 4.0) * 180.0 / kPi / 0.6;
+    cam.width = 161;
+    cam.height = 121;
+    g = render_gbuffer(mesh, cam);
+  }
+};
+
+// The hit mask is the analytic disc: every pixel whose centre ray is more than a pixel inside
+// the silhouette cone hits, every one more than a pixel outside misses.
+TEST(GBuffer, SphereHitMaskIsTheDisc) {
+  const SphereView s;
+  const double beta = std::asin(1.0 / 4.0);  // angular radius of the sphere
+  const double pixel = s.cam.fov_y_deg * kPi / 180.0 / s.cam.height;
+  int inside = 0, outside = 0, boundary = 0;
+  for (int y = 0; y < s.cam.height; ++y) {
+    for (int x = 0; x < s.cam.width; ++x) {
+      const double angle = std::acos(std::clamp(-s.cam.pixel_direction(x, y).z, -1.0, 1.0));
+      if (angle < beta - pixel) {
+        ++inside;
+        EXPECT_TRUE(s.g.hit(x, y)) << x << "," << y;
+      } else if (angle > beta + pixel) {
+        ++outside;
+        EXPECT_FALSE(s.g.hit(x, y)) << x << "," << y;
+      } else {
+        ++boundary;
+      }
+    }
+  }
+  EXPECT_GT(inside, 3000);
+  EXPECT_GT(outside, 3000);
+  EXPECT_LT(boundary, 2 * (inside + outside) / 10);
+}
+
+// Barycentric reconstruction lands on the sphere (within the tessellation's sagitta) and on
+// the pixel's ray at the reported depth.
+TEST(GBuffer, BarycentricsReconstructTheHitPoint) {
+  const SphereView s;
+  // Every triangle's vertices are on the sphere; its interior is at most this far inside.
+  const double sagitta = 1.0 - std::cos(kPi / kSegments) * std::cos(kPi / kRings);
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < s.g.pixel_count(); ++i) {
+    const int tri = s.g.triangle[i];
+    if (tri < 0) continue;
+    ++hits;
+    const std::uint32_t* v = &s.mesh.indices[3 * static_cast<std::size_t>(tri)];
+    const double b1 = s.g.bary[2 * i], b2 = s.g.bary[2 * i + 1], b0 = 1 - b1 - b2;
+    ASSERT_GE(b0, -1e-5);
+    ASSERT_GE(b1, -1e-5);
+    ASSERT_GE(b2, -1e-5);
+    const Vec3d p = b0 * Vec3d(s.mesh.positions[v[0]]) + b1 * Vec3d(s.mesh.positions[v[1]]) +
+                    b2 * Vec3d(s.mesh.positions[v[2]]);
+    const double r = glm::length(p);
+    EXPECT_LE(r, 1.0 + 1e-5);
+    EXPECT_GE(r, 1.0 - sagitta - 1e-5);
+    const Vec3d on_ray = s.cam.eye + double(s.g.depth[i]) * direction(s.g, i);
+    EXPECT_NEAR(glm::length(on_ray - p), 0.0, 1e-4);
+    // The visible half only.
+    EXPECT_GT(p.z, 0.0);
+  }
+  EXPECT_EQ(hits, s.g.hit_count());
+}
+
+// At the centre pixel the eye is straight above the surface: e = (0, 0, 1) in the local frame.
+// Elsewhere e.z is the cosine between the eye direction and the sphere's normal.
+TEST(GBuffer, LocalViewDirection) {
+  const SphereView s;
+  // Interpolated vertex normals deviate from the radial direction by at most about a
+  // triangle's angular size.
+  const double tess = 2.0 * kPi / kSegments;
+  const std::size_t c = s.g.index(s.cam.width / 2, s.cam.height / 2);
+  ASSERT_GE(s.g.triangle[c], 0);
+  const Vec3d e = view_local(s.g, c);
+  EXPECT_NEAR(glm::length(e), 1.0, 1e-5);
+  EXPECT_GT(e.z, std::cos(tess));
+  EXPECT_LT(std::hypot(e.x, e.y), std::sin(tess));
+  double worst = 0;
+  for (std::size_t i = 0; i < s.g.pixel_count(); ++i) {
+    if (s.g.triangle[i] < 0) continue;
+    const Vec3d d = direction(s.g, i);
+    const Vec3d p = s.cam.eye + double(s.g.depth[i]) * d;
+    const double cos_true = glm::dot(-d, glm::normalize(p));
+    worst = std::max(worst, std::abs(view_local(s.g, i).z - cos_true));
+    EXPECT_NEAR(glm::length(view_local(s.g, i)), 1.0, 1e-5);
+  }
+  // Linear interpolation of unit normals errs to second order in the triangle's size.
+  EXPECT_LT(worst, tess * tess / 4);
+}
+
+// Misses carry the background direction and the documented fill values; direction is the
+// camera's pixel direction everywhere.
+TEST(GBuffer, MissesAndDirections) {
+  const SphereView s;
+  for (int y = 0; y < s.cam.height; y += 7) {
+    for (int x = 0; x < s.cam.width; x += 5) {
+      const std::size_t i = s.g.index(x, y);
+      EXPECT_NEAR(glm::length(direction(s.g, i) - s.cam.pixel_direction(x, y)), 0.0, 1e-6);
+      EXPECT_EQ(s.g.direction[4 * i + 3], 0.f);
+      if (s.g.hit(x, y)) continue;
+      EXPECT_EQ(s.g.triangle[i], -1);
+      EXPECT_EQ(s.g.part[i], -1);
+      EXPECT_TRUE(std::isinf(s.g.depth[i]));
+      EXPECT_EQ(view_local(s.g, i), Vec3d(0.0));
+    }
+  }
+}
+
+// A plane seen from above: UV is the plane's affine parametrisation of the hit point, and the
+// local frame is (t, b, n) = (+x, -z, +y), so e_local = (e.x, -e.z, e.y) exactly.
+TEST(GBuffer, PlaneUvAndFrame) {
+  const Mesh plane = make_plane(2.0, 3.0, 6);
+  Camera cam;
+  cam.eye = {0.3, 2.0, 0.4};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 0, -1};
+  cam.fov_y_deg = 70;
+  cam.width = 64;
+  cam.height = 48;
+  const GBuffer g = render_gbuffer(plane, cam);
+  ASSERT_GT(g.hit_count(), 1000u);
+  for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+    if (g.triangle[i] < 0) continue;
+    const Vec3d d = direction(g, i);
+    const Vec3d p = cam.eye + double(g.depth[i]) * d;
+    EXPECT_NEAR(p.y, 0.0, 1e-5);
+    EXPECT_NEAR(g.uv[2 * i], p.x / 2.0 + 0.5, 1e-5);
+    EXPECT_NEAR(g.uv[2 * i + 1], 0.5 - p.z / 3.0, 1e-5);
+    const Vec3d e = -d;
+    const Vec3d want(e.x, -e.z, e.y);
+    EXPECT_NEAR(glm::length(view_local(g, i) - want), 0.0, 1e-5);
+    EXPECT_NEAR(g.normal[4 * i + 1], 1.0f, 1e-6f);
+  }
+}
+
+// Parts come from the mesh's triangle parts; two traces of one tracer agree bit for bit.
+TEST(GBuffer, PartsAndDeterminism) {
+  Mesh left = make_sphere(0.5, 24, 12), right = make_box(Vec3d(0.4), 2);
+  Transform xf;
+  xf.translate = {-0.7, 0, 0};
+  apply_transform(left, xf);
+  xf.translate = {0.7, 0, 0};
+  apply_transform(right, xf);
+  Mesh scene;
+  scene.append(left, 0);
+  scene.append(right, 1);
+  Camera cam;
+  cam.eye = {0, 0, 5};
+  cam.width = 80;
+  cam.height = 40;
+  cam.fov_y_deg = 30;
+  const GBufferTracer tracer(scene);
+  const GBuffer a = tracer.trace(cam), b = tracer.trace(cam);
+  EXPECT_EQ(a.triangle, b.triangle);
+  EXPECT_EQ(a.view_local, b.view_local);
+  EXPECT_EQ(a.uv, b.uv);
+  int parts[2] = {0, 0};
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const std::size_t i = a.index(x, y);
+      if (a.triangle[i] < 0) continue;
+      EXPECT_EQ(a.part[i], scene.part_of(static_cast<std::size_t>(a.triangle[i])));
+      EXPECT_EQ(a.part[i], x < cam.width / 2 ? 0 : 1) << x << "," << y;
+      ++parts[a.part[i]];
+    }
+  }
+  EXPECT_GT(parts[0], 100);
+  EXPECT_GT(parts[1], 100);
+}
+
+TEST(GBuffer, DebugImages) {
+  const SphereView s;
+  const RgbImage n = gbuffer_image(s.g, GBufferView::kNormal);
+  ASSERT_EQ(n.width, s.cam.width);
+  ASSERT_EQ(n.height, s.cam.height);
+  EXPECT_EQ(n.at(0, 0), Rgb(0.f));  // background
+  const Rgb c = n.at(s.cam.width / 2, s.cam.height / 2);
+  EXPECT_NEAR(c.z, 1.0f, 0.01f);  // normal (0, 0, 1) -> (0.5, 0.5, 1)
+  EXPECT_NEAR(c.x, 0.5f, 0.05f);
+  const RgbImage checker = gbuffer_image(s.g, GBufferView::kUvChecker);
+  float lo = 1, hi = 0;
+  for (const Rgb& p : checker.pixels) {
+    EXPECT_GE(glm::min(p.x, glm::min(p.y, p.z)), 0.f);
+    EXPECT_LE(glm::max(p.x, glm::max(p.y, p.z)), 1.f);
+    if (p != Rgb(0.f)) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
+  }
+  EXPECT_GT(hi - lo, 0.3f);  // both checker colours appear
+  const fs::path file =
+      fs::temp_directory_path() / ("prtlab_gbuffer_test_" + std::to_string(::getpid()) + ".png");
+  write_gbuffer_png(s.g, GBufferView::kUvChecker, file);
+  EXPECT_GT(fs::file_size(file), 100u);
+  fs::remove(file);
+}
+
+TEST(GBuffer, RejectsEmptyMeshAndBadCamera) {
+  EXPECT_THROW(GBufferTracer(Mesh{}), ParameterError);
+  const GBufferTracer t(make_box(Vec3d(0.5), 1));
+  Camera bad;
+  bad.fov_y_deg = -1;
+  EXPECT_THROW(t.trace(bad), ParameterError);
+}
+
+}  // namespace
+}  // namespace prt
