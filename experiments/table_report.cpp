@@ -150,11 +150,16 @@ std::vector<std::string> table_notes(const TableResult& result) {
     notes.push_back(fmt::format(
         "{}: nnz(T) {:.2f} M is {:.0f} % of the paper's {:.1f} M ({:.0f} vs {:.0f} entries per "
         "vertex; a hemisphere holds N/2 = {} pixels). Our T clips at the tangent plane: a pixel "
-        "with no unblocked sub-ray above it has no entry. The paper's count per vertex exceeds a "
-        "hemisphere, so it keeps some below-horizon directions (docs/transfer.md, \"nnz vs the "
-        "paper\"). Our mesh is a stand-in for the paper's model (docs/scenes.md){}.",
+        "with no unblocked sub-ray above it has no entry. {} Our mesh is a stand-in for the "
+        "paper's model (docs/scenes.md){}.",
         r.scene, r.nnz_millions, 100.0 * r.nnz_millions / p.nnz_millions, p.nnz_millions,
         ours_per_vertex, paper_per_vertex, r.pixel_count / 2,
+        paper_per_vertex > r.pixel_count / 2
+            ? "The paper's count per vertex exceeds a hemisphere, so it keeps some below-horizon "
+              "directions (docs/transfer.md, \"nnz vs the paper\")."
+            : "The paper's model is less open to the sky than ours (the count per vertex is "
+              "the visible fraction of the hemisphere: different geometry, different "
+              "self-occlusion).",
         static_cast<double>(r.vertices) != p.vertices
             ? fmt::format(" with {} vertices vs the paper's {}", thousands(r.vertices),
                           thousands(p.vertices))
@@ -173,11 +178,13 @@ std::vector<std::string> table_notes(const TableResult& result) {
         "{}: computation {:.1f} % vs the paper's {:.1f} %, data {:.2f} % vs {:.2f} %. FLOPs are "
         "counted as the paper counts them (a bicluster costs r + 2l - 1, a residual term 2; "
         "docs/backends/bicluster.md); storage is our layout{}, the paper does not give its "
-        "layout. Both percentages are relative to our own T, which has fewer entries.",
+        "layout. Both percentages are relative to our own T, which has {} entries than the "
+        "paper's.",
         r.scene, r.computation_percent, p.computation_percent, r.data_percent, p.data_percent,
         largest != r.storage.end() ? fmt::format(" ({} {:.1f} of {:.1f} MB)", largest->name,
                                                  largest->bytes / 1e6, r.reduced_mb)
-                                   : ""));
+                                   : "",
+        r.nnz_millions < p.nnz_millions ? "fewer" : "more"));
   }
   notes.push_back(
       "Precomputation: T's computation (Embree visibility and binning, without building the "
