@@ -230,31 +230,11 @@ Rgb Btf::shade(Vec2 uv, Vec3 view_local, std::span<const Rgb> local_radiance,
 
 // --- statistics -----------------------------------------------------------------------------
 
-namespace {
-
-// Projected solid angle of every view cell, integral of cos(theta) over the cell (midpoint rule on
-// 16 x 16 points of the cell in the square; the map is area preserving, so each point carries
-// 2 pi / (S^2 256) sr). Exact to about 1e-6 of the cell's value; the cells sum to pi.
-std::vector<double> projected_solid_angles(int side) {
-  constexpr int kSub = 16;
-  std::vector<double> out(static_cast<std::size_t>(side) * side, 0.0);
-  const double dw = kTwoPi / (static_cast<double>(side) * side * kSub * kSub);
-  for (int row = 0; row < side; ++row)
-    for (int col = 0; col < side; ++col)
-      for (int sy = 0; sy < kSub; ++sy)
-        for (int sx = 0; sx < kSub; ++sx) {
-          const Vec2d ab((col + (sx + 0.5) / kSub) / side, (row + (sy + 0.5) / kSub) / side);
-          out[static_cast<std::size_t>(row) * side + col] += square_to_hemisphere(ab).z * dw;
-        }
-  return out;
-}
-
-}  // namespace
-
 BtfStats btf_stats(const Btf& btf) {
   BtfStats s;
   const HemisphereGrid lights(btf.light_side());
-  const std::vector<double> projected = projected_solid_angles(btf.view_side());
+  const std::vector<double> projected = HemisphereGrid(btf.view_side()).projected_solid_angles();
+  const std::vector<double> light_projected = lights.projected_solid_angles();
   const int m = btf.light_count();
   std::vector<Vec3d> albedo(m, Vec3d(0.0));
   Vec3d lo(std::numeric_limits<double>::infinity()), hi(-lo), sum(0.0);
@@ -284,7 +264,9 @@ BtfStats btf_stats(const Btf& btf) {
   s.albedo.resize(m);
   Vec3d amean(0.0), amax(0.0);
   for (int j = 0; j < m; ++j) {
-    const Vec3d a = albedo[j] / (btf.texel_count() * lights.direction(j).z);
+    // The stored values carry the cell-mean cosine of light cell j (see btf.h), not cos(theta_j).
+    const double mean_cos = light_projected[j] / lights.cell_solid_angle();
+    const Vec3d a = albedo[j] / (btf.texel_count() * mean_cos);
     s.albedo[j] = Rgb(a);
     amean += a / static_cast<double>(m);
     amax = glm::max(amax, a);

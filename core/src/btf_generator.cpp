@@ -9,9 +9,11 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <numbers>
 #include <string>
 
+#include "embree_triangle_scene.h"
 #include "prtlab/error.h"
 #include "prtlab/hemisphere_grid.h"
 #include "prtlab/local_frame.h"
@@ -33,17 +35,6 @@ constexpr float kSlabMargin = 1e-3f;
 // rises out of a 0.1-high structure within about 6 tiles.
 constexpr int kMaxSegments = 4096;
 
-struct DeviceError {
-  std::mutex mutex;
-  std::string first;
-};
-
-void on_embree_error(void* user, RTCError code, const char* message) {
-  auto* err = static_cast<DeviceError*>(user);
-  std::lock_guard lock(err->mutex);
-  if (err->first.empty())
-    err->first = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
-}
 
 std::uint32_t mix32(std::uint32_t v) {
   v ^= v >> 16;
@@ -107,18 +98,8 @@ struct MesoTracer::Impl {
   MesoStructure meso;
   std::vector<Vec3> triangle_normal;  // unit geometric normals (winding as given)
   float ceiling = 0.0f;
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  DeviceError error;
-
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-  void check(const char* what) {
-    std::lock_guard lock(error.mutex);
-    if (!error.first.empty()) throw Error(fmt::format("{} failed: {}", what, error.first));
-  }
+  std::optional<EmbreeTriangleScene> embree;
+  RTCScene scene = nullptr;  // embree->scene()
 
   // One segment inside the tile: Embree's first hit in [0, tfar] (or any hit for occlusion).
   bool segment(const Vec3& o, const Vec3& d, float tfar, bool any, RTCRayHit& rh) const {
@@ -221,37 +202,8 @@ MesoTracer::MesoTracer(const MesoStructure& meso) : impl_(std::make_unique<Impl>
     m.triangle_normal[t] = len > 0.0f ? n / len : Vec3(0.f, 0.f, 1.f);
   }
 
-  m.device = rtcNewDevice(nullptr);
-  if (!m.device)
-    throw Error(fmt::format("Embree: rtcNewDevice failed (error {})",
-                            static_cast<int>(rtcGetDeviceError(nullptr))));
-  rtcSetDeviceErrorFunction(m.device, on_embree_error, &m.error);
-  RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                         meso.positions.size()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    m.check("Embree geometry buffer allocation");
-    throw Error("Embree: geometry buffer allocation failed");
-  }
-  for (std::size_t v = 0; v < meso.positions.size(); ++v) {
-    vb[3 * v + 0] = meso.positions[v].x;
-    vb[3 * v + 1] = meso.positions[v].y;
-    vb[3 * v + 2] = meso.positions[v].z;
-  }
-  std::copy(meso.indices.begin(), meso.indices.end(), ib);
-  rtcCommitGeometry(geom);
-  m.scene = rtcNewScene(m.device);
-  // Robust traversal: rays that re-enter at a tile side start exactly on triangle edges.
-  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);
-  rtcAttachGeometry(m.scene, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(m.scene);
-  m.check("Embree scene build");
+  m.embree.emplace(meso.positions, meso.indices);
+  m.scene = m.embree->scene();
 }
 
 MesoTracer::~MesoTracer() = default;
@@ -363,6 +315,19 @@ Btf generate_btf(const MesoStructure& meso, const BtfParams& params, bool show_p
   const ShadeContext ctx{tracer, tracer.structure(), lights, params.interreflection_samples};
   Progress progress("btf " + meso.name, static_cast<std::int64_t>(u) * u, show_progress);
   const float inv_samples = 1.0f / static_cast<float>(ss * ss);
+  // Light-direction quadrature (btf.h "Units"): the response is point-sampled at the cell centre
+  // d_j, but the macro cosine is integrated over the cell: each light's value is scaled by
+  // (P_j / Omega_j) / cos(theta_j), the cell-mean cosine over the centre's cosine. With L*_j the
+  // radiance integrated over cell j, sum_j b_j L*_j is then exact for a flat Lambertian under
+  // any light that is constant within cells (the centre cosine alone overestimates the
+  // irradiance by about 2 / S^2: 3.1 % at S = 8; docs/image-error.md derives it).
+  std::vector<float> cosine_weight(static_cast<std::size_t>(nl));
+  {
+    const std::vector<double> projected = light_grid.projected_solid_angles();
+    for (int j = 0; j < nl; ++j)
+      cosine_weight[j] = static_cast<float>(projected[j] / light_grid.cell_solid_angle() /
+                                            light_grid.direction(j).z);
+  }
 
   tbb::parallel_for(tbb::blocked_range<int>(0, u * u, 1), [&](const tbb::blocked_range<int>& r) {
     std::vector<Rgb> acc(per_texel);
@@ -383,9 +348,10 @@ Btf generate_btf(const MesoStructure& meso, const BtfParams& params, bool show_p
       }
       float* out = rgb.data() + static_cast<std::size_t>(texel) * per_texel * 3;
       for (std::size_t i = 0; i < per_texel; ++i) {
-        out[3 * i + 0] = acc[i].x * inv_samples;
-        out[3 * i + 1] = acc[i].y * inv_samples;
-        out[3 * i + 2] = acc[i].z * inv_samples;
+        const float w = inv_samples * cosine_weight[i % static_cast<std::size_t>(nl)];
+        out[3 * i + 0] = acc[i].x * w;
+        out[3 * i + 1] = acc[i].y * w;
+        out[3 * i + 2] = acc[i].z * w;
       }
       progress.advance();
     }

@@ -8,8 +8,10 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <string>
 
+#include "embree_triangle_scene.h"
 #include "prtlab/error.h"
 
 namespace prt {
@@ -18,17 +20,6 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr int kTile = 16;
 
-struct DeviceError {
-  std::mutex mutex;
-  std::string first;
-};
-
-void on_embree_error(void* user, RTCError code, const char* message) {
-  auto* err = static_cast<DeviceError*>(user);
-  std::lock_guard lock(err->mutex);
-  if (err->first.empty())
-    err->first = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
-}
 
 void put4(std::vector<float>& a, std::size_t i, const Vec3d& v) {
   a[4 * i + 0] = static_cast<float>(v.x);
@@ -59,22 +50,12 @@ void GBuffer::reset(int w, int h) {
 }
 
 struct GBufferTracer::Impl {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  DeviceError error;
+  std::optional<EmbreeTriangleScene> embree;
+  RTCScene scene = nullptr;  // embree->scene()
   std::vector<std::uint32_t> indices;
   std::vector<std::uint16_t> triangle_part;
   std::vector<Vec2> uvs;
   std::vector<Vec3d> frame_t, frame_n;  // Mesh::frame of every vertex (b = n x t)
-
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-  void check(const char* what) {
-    std::lock_guard lock(error.mutex);
-    if (!error.first.empty()) throw Error(fmt::format("{} failed: {}", what, error.first));
-  }
 };
 
 GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()) {
@@ -104,37 +85,8 @@ GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()
     im.frame_n[v] = f.n;
   }
 
-  im.device = rtcNewDevice(nullptr);
-  if (!im.device)
-    throw Error(fmt::format("Embree: rtcNewDevice failed (error {})",
-                            static_cast<int>(rtcGetDeviceError(nullptr))));
-  rtcSetDeviceErrorFunction(im.device, on_embree_error, &im.error);
-  RTCGeometry geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->vertex_count()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
-                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                            mesh->triangle_count()));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    im.check("Embree geometry buffer allocation");
-    throw Error("Embree: geometry buffer allocation failed");
-  }
-  for (std::size_t v = 0; v < mesh->vertex_count(); ++v) {
-    vb[3 * v + 0] = mesh->positions[v].x;
-    vb[3 * v + 1] = mesh->positions[v].y;
-    vb[3 * v + 2] = mesh->positions[v].z;
-  }
-  std::copy(mesh->indices.begin(), mesh->indices.end(), ib);
-  rtcCommitGeometry(geom);
-  im.scene = rtcNewScene(im.device);
-  // Robust (watertight) traversal: no ray slips through a shared edge into the background.
-  rtcSetSceneFlags(im.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(im.scene, RTC_BUILD_QUALITY_HIGH);
-  rtcAttachGeometry(im.scene, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(im.scene);
-  im.check("Embree scene build");
+  im.embree.emplace(mesh->positions, mesh->indices);
+  im.scene = im.embree->scene();
 }
 
 GBufferTracer::~GBufferTracer() = default;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "prtlab/error.h"
 
@@ -80,6 +81,54 @@ HemisphereGrid::HemisphereGrid(int side) : s_(side) {
 
 double HemisphereGrid::cell_solid_angle() const {
   return kTwoPi / (static_cast<double>(s_) * s_);
+}
+
+namespace {
+
+// Integral of v -> max(u^2, v^2) over [v0, v1] for fixed u.
+double max_square_inner(double u, double v0, double v1) {
+  const double a = std::abs(u);
+  const auto cube = [](double x) { return x * x * x / 3.0; };
+  double s = 0.0;
+  const double lo = std::max(v0, -a), hi = std::min(v1, a);
+  if (hi > lo) s += u * u * (hi - lo);
+  if (v0 < -a) s += cube(std::min(v1, -a)) - cube(v0);
+  if (v1 > a) s += cube(v1) - cube(std::max(v0, a));
+  return s;
+}
+
+// Integral of max(u^2, v^2) over [u0, u1] x [v0, v1]. The inner integral is a cubic in u between
+// the breakpoints 0, +-|v0|, +-|v1|, so Simpson's rule on each piece is exact.
+double max_square_integral(double u0, double u1, double v0, double v1) {
+  std::vector<double> cuts{u0, u1};
+  for (double c : {0.0, v0, -v0, v1, -v1})
+    if (c > u0 && c < u1) cuts.push_back(c);
+  std::sort(cuts.begin(), cuts.end());
+  double sum = 0.0;
+  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+    const double a = cuts[i], b = cuts[i + 1];
+    sum += (b - a) / 6.0 *
+           (max_square_inner(a, v0, v1) + 4.0 * max_square_inner(0.5 * (a + b), v0, v1) +
+            max_square_inner(b, v0, v1));
+  }
+  return sum;
+}
+
+}  // namespace
+
+// z = 1 - r^2 and r^2 = max(u^2, v^2) in the concentric map's [-1, 1]^2 coordinates, where the
+// map is area preserving with d(omega) = (pi / 2) du dv: P = (pi / 2) (area - int max(u^2, v^2)),
+// integrated exactly.
+std::vector<double> HemisphereGrid::projected_solid_angles() const {
+  std::vector<double> out(static_cast<std::size_t>(s_) * s_, 0.0);
+  const auto coord = [this](int i) { return 2.0 * i / s_ - 1.0; };
+  for (int row = 0; row < s_; ++row)
+    for (int col = 0; col < s_; ++col) {
+      const double u0 = coord(col), u1 = coord(col + 1), v0 = coord(row), v1 = coord(row + 1);
+      out[static_cast<std::size_t>(row) * s_ + col] =
+          0.5 * kPi * ((u1 - u0) * (v1 - v0) - max_square_integral(u0, u1, v0, v1));
+    }
+  return out;
 }
 
 int HemisphereGrid::cell_of(const Vec3d& d) const {

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 
+#include "embree_triangle_scene.h"
 #include "prtlab/cubemap.h"
 #include "prtlab/error.h"
 #include "prtlab/log.h"
@@ -90,77 +91,24 @@ void SupersampledCubemap::subpixel_bounds(std::size_t r, int& face, double& s0, 
 
 namespace {
 
-struct DeviceError {
-  std::mutex mutex;
-  std::string first;
-};
-
-void on_embree_error(void* user, RTCError code, const char* message) {
-  auto* err = static_cast<DeviceError*>(user);
-  std::lock_guard lock(err->mutex);
-  if (err->first.empty())
-    err->first = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
-}
 
 }  // namespace
 
 struct EmbreeScene::Impl {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  DeviceError error;
+  EmbreeTriangleScene embree;
   double diagonal = 0.0;
   double offset = 0.0;
-
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-  void check(const char* what) {
-    std::lock_guard lock(error.mutex);
-    if (!error.first.empty()) throw Error(fmt::format("{} failed: {}", what, error.first));
-  }
+  RTCScene scene = nullptr;  // embree.scene(), read on every ray
 };
 
-EmbreeScene::EmbreeScene(const Mesh& mesh, double offset_relative)
-    : impl_(std::make_unique<Impl>()) {
+EmbreeScene::EmbreeScene(const Mesh& mesh, double offset_relative) {
   if (mesh.triangle_count() == 0) throw ParameterError("EmbreeScene: the mesh has no triangles");
   if (!(offset_relative >= 0.0)) throw ParameterError("EmbreeScene: the ray offset must be >= 0");
+  impl_ = std::make_unique<Impl>(Impl{EmbreeTriangleScene(mesh.positions, mesh.indices)});
   const Aabb box = mesh.bounds();
   impl_->diagonal = glm::length(Vec3d(box.hi) - Vec3d(box.lo));
   impl_->offset = offset_relative * impl_->diagonal;
-
-  impl_->device = rtcNewDevice(nullptr);
-  if (!impl_->device) {
-    throw Error(fmt::format("Embree: rtcNewDevice failed (error {})",
-                            static_cast<int>(rtcGetDeviceError(nullptr))));
-  }
-  rtcSetDeviceErrorFunction(impl_->device, on_embree_error, &impl_->error);
-
-  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
-                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                            mesh.triangle_count()));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    impl_->check("Embree geometry buffer allocation");
-    throw Error("Embree: geometry buffer allocation failed");
-  }
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-    vb[3 * v + 0] = mesh.positions[v].x;
-    vb[3 * v + 1] = mesh.positions[v].y;
-    vb[3 * v + 2] = mesh.positions[v].z;
-  }
-  std::copy(mesh.indices.begin(), mesh.indices.end(), ib);
-  rtcCommitGeometry(geom);
-  impl_->scene = rtcNewScene(impl_->device);
-  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-  rtcAttachGeometry(impl_->scene, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(impl_->scene);
-  impl_->check("Embree scene build");
+  impl_->scene = impl_->embree.scene();
 }
 
 EmbreeScene::~EmbreeScene() = default;

@@ -26,14 +26,24 @@ BtfParams tiny(int u = 8, int views = 4, int lights = 4) {
   return p;
 }
 
-TEST(BtfGenerator, LambertIsAlbedoOverPiTimesCosine) {
+// The macro cosine is the cell mean P_j / Omega_j (btf.h "Units"), so a Lambertian's values sum
+// to the exact irradiance: sum_j b_j Omega_j = albedo / pi * sum_j P_j = albedo.
+TEST(BtfGenerator, LambertIsAlbedoOverPiTimesCellMeanCosine) {
   const Btf b = generate_btf(make_btf_material("lambert"), tiny());
   const HemisphereGrid lights(4);
+  const std::vector<double> projected = lights.projected_solid_angles();
+  double projected_sum = 0.0;
+  for (double p : projected) projected_sum += p;
+  EXPECT_NEAR(projected_sum, kPi, 1e-6);
   const double albedo = 0.8;
+  double reflected = 0.0;  // texel 0, view 0, unit radiance from every direction
+  for (int j = 0; j < b.light_count(); ++j)
+    reflected += b.value(0, 0, j).x * lights.cell_solid_angle();
+  EXPECT_NEAR(reflected, albedo / kPi * kPi, 1e-5);
   for (int t = 0; t < b.texel_count(); ++t) {
     for (int v = 0; v < b.view_count(); ++v) {
       for (int j = 0; j < b.light_count(); ++j) {
-        const double expected = albedo / kPi * lights.direction(j).z;
+        const double expected = albedo / kPi * projected[j] / lights.cell_solid_angle();
         const Rgb got = b.value(t, v, j);
         for (int c = 0; c < 3; ++c)
           ASSERT_NEAR(got[c], expected, 0.01 * expected)
@@ -60,7 +70,8 @@ TEST(BtfGenerator, BoxShadowAreaMatchesTheClosedForm) {
     double mean = 0.0;
     for (int t = 0; t < b.texel_count(); ++t) mean += b.value(t, 0, j).x;
     mean /= b.texel_count();
-    const double lit = mean / (l.z / kPi);  // fraction of the tile that is lit
+    const double mean_cos = lights.projected_solid_angles()[j] / lights.cell_solid_angle();
+    const double lit = mean / (mean_cos / kPi);  // fraction of the tile that is lit
     const double tan_theta = std::sqrt(1.0 - l.z * l.z) / l.z;
     const double phi = std::atan2(l.y, l.x);
     const double shadow =

@@ -257,5 +257,32 @@ TEST(HemisphereGrid, RejectsBadSide) {
   EXPECT_THROW(HemisphereGrid(-1), ParameterError);
 }
 
+// The closed-form projected solid angles agree with a brute-force midpoint quadrature of
+// cos(theta) through the map (an independent computation), and sum to pi.
+TEST(HemisphereGrid, ProjectedSolidAnglesMatchQuadratureAndSumToPi) {
+  for (int side : {1, 3, 8, 12}) {
+    const HemisphereGrid grid(side);
+    const std::vector<double> p = grid.projected_solid_angles();
+    ASSERT_EQ(p.size(), static_cast<std::size_t>(side * side));
+    double sum = 0.0;
+    constexpr int kSub = 200;
+    for (int j = 0; j < side * side; ++j) {
+      const int row = j / side, col = j % side;
+      double q = 0.0;
+      for (int sy = 0; sy < kSub; ++sy)
+        for (int sx = 0; sx < kSub; ++sx)
+          q += square_to_hemisphere(
+                   {(col + (sx + 0.5) / kSub) / side, (row + (sy + 0.5) / kSub) / side})
+                   .z;
+      q *= grid.cell_solid_angle() / (kSub * kSub);
+      EXPECT_NEAR(p[j], q, 1e-4 * grid.cell_solid_angle()) << "side " << side << " cell " << j;
+      EXPECT_GT(p[j], 0.0);
+      EXPECT_LT(p[j], grid.cell_solid_angle());
+      sum += p[j];
+    }
+    EXPECT_NEAR(sum, kPi, 1e-12) << "side " << side;
+  }
+}
+
 }  // namespace
 }  // namespace prt

@@ -3,10 +3,14 @@
 // directions x M light directions x RGB, float32.
 //
 // Units: exitant radiance per unit irradiance arriving from the light direction d, measured on
-// a plane perpendicular to d, with the cosine at the meso surface included. A flat Lambertian
-// of albedo a therefore holds a / pi * cos(theta_d) for every texel and view, and the shading
-// sum of DESIGN.md, B(x, e) = sum_j b(u, e, d_j) L*_j, is the rendering equation's quadrature
-// when L*_j is the radiance of light cell j integrated over its solid angle.
+// a plane perpendicular to d, with the cosine at the meso surface included. Light j is a cell
+// of the hemisphere grid, not a point: the response is sampled at the cell centre d_j and the
+// macro cosine is the cell's mean, c_j = P_j / Omega_j (HemisphereGrid::projected_solid_angles).
+// A flat Lambertian of albedo a therefore holds a / pi * c_j for every texel and view, and the
+// shading sum of DESIGN.md, B(x, e) = sum_j b(u, e, d_j) L*_j, is the rendering equation's
+// quadrature when L*_j is the radiance of light cell j integrated over its solid angle; for
+// the Lambertian it is exact (sum_j P_j = pi), where the centre cosine cos(theta_j) would
+// overestimate the irradiance by about 2 / S^2 (3.1 % at S = 8).
 //
 // Sampling:
 //   texels  (x, y), x, y in [0, U): texel x covers u in [x/U, (x+1)/U], y covers v likewise;

@@ -28,7 +28,7 @@
 namespace prt {
 
 /// Version of the generator's algorithm; part of the cache key.
-inline constexpr std::uint32_t kBtfGeneratorVersion = 1;
+inline constexpr std::uint32_t kBtfGeneratorVersion = 2;  // 2: cell-mean cosine per light
 
 struct BtfParams {
   int resolution = 32;              ///< U texels per side (1..1024)

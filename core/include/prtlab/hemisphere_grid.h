@@ -39,6 +39,10 @@ class HemisphereGrid {
   const std::vector<Vec3d>& directions() const { return directions_; }
   /// Solid angle of every cell: 2 pi / S^2.
   double cell_solid_angle() const;
+  /// Projected solid angle of every cell, the integral of cos(theta) over it (sums to pi);
+  /// P_j / cell_solid_angle() is the cell-mean cosine. Computed in closed form (exact up to
+  /// rounding): in the concentric map z = 1 - max(u^2, v^2) and the map preserves area.
+  std::vector<double> projected_solid_angles() const;
   /// Cell containing local direction d (need not be normalised); -1 when d is below the
   /// horizon (z <= 0) or not finite. Square coordinates on a cell edge or at a = 1, b = 1 are
   /// clamped into [0, S-1].
