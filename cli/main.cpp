@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
   cli::add_experiment_commands(app);
   cli::add_btf_commands(app);
   cli::add_render_commands(app);
+  cli::add_image_commands(app);
 
   try {
     app.parse(argc, argv);
