@@ -75,9 +75,12 @@ def main():
             "",
             "## Provenance",
             "",
-            f"- git: {provenance.get('git_hash')}{' (dirty)' if provenance.get('git_dirty') else ''}",
-            f"- machine: {provenance.get('cpu_model')}, {provenance.get('cores')} cores",
+            f"- git: {provenance.get('git')}{' (dirty)' if provenance.get('git_dirty') else ''}",
+            f"- machine: {provenance.get('machine', {}).get('cpu')}, "
+            f"{provenance.get('machine', {}).get('cores')} cores",
+            f"- OpenCL: {(provenance.get('opencl_device') or {}).get('label', 'none')}",
             f"- date: {provenance.get('date_utc')}",
+            f"- command: `bash scripts/run.sh` (outputs in {out}/)",
         ]
     text = "\n".join(lines) + "\n"
     tmp = out / "bunny-comparison.md.tmp"

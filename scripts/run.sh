@@ -32,5 +32,23 @@ for backend in $("$PRTLAB" list --json | python3 -c 'import json,sys; print(" ".
   "$PRTLAB" -q compress bunny --backend "$backend" --json > "$OUT/bunny-$backend.json.tmp"
   mv "$OUT/bunny-$backend.json.tmp" "$OUT/bunny-$backend.json"
 done
+
+# Bi-scale rendering of the bunny under a Blender world EXR with the exact transfer and with
+# bicluster: images, an error map against the exact image, frame rates, and one table.
+ENV="${ENV:-courtyard}"
+RENDERED="uncompressed bicluster"
+for backend in $RENDERED; do
+  echo "== render bunny, $backend, $ENV"
+  "$PRTLAB" render bunny --backend "$backend" --env "$ENV" --filter bilinear \
+    --out "$OUT/bunny-$ENV-$backend.exr" --json > "$OUT/render-$backend.json.tmp"
+  mv "$OUT/render-$backend.json.tmp" "$OUT/render-$backend.json"
+  "$PRTLAB" image diff "$OUT/bunny-$ENV-$backend.exr" "$OUT/bunny-$ENV-uncompressed.exr" \
+    --out "$OUT/bunny-$backend-error.png" --json > "$OUT/diff-$backend.json.tmp"
+  mv "$OUT/diff-$backend.json.tmp" "$OUT/diff-$backend.json"
+  echo "== fps bunny, $backend"
+  "$PRTLAB" fps bunny --backend "$backend" --env "$ENV" --frames 30 --json > "$OUT/fps-$backend.json.tmp"
+  mv "$OUT/fps-$backend.json.tmp" "$OUT/fps-$backend.json"
+done
+/usr/bin/python3 scripts/main_table.py "$OUT" $RENDERED
 echo "main job done: outputs in $OUT/"
 ls -l "$OUT"

@@ -31,6 +31,7 @@ struct FrameRenderer::Impl {
   GBuffer gbuffer;
   LocalRadiance radiance;
   std::optional<Cubemap> environment;
+  std::optional<Cubemap> background;  // what misses show; the lighting cubemap by default
   bool have_camera = false;
   RgbImage image;  // C++ path
   bool rendered = false;
@@ -91,7 +92,7 @@ void FrameRenderer::set_camera(const Camera& camera) {
   ++s.counters.gbuffer_traces;
 }
 
-void FrameRenderer::set_environment(const Cubemap& environment) {
+void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* background) {
   Impl& s = *impl_;
   auto t0 = Clock::now();
   const LightCoeffs light = s.transfer->project_light(environment);
@@ -109,10 +110,11 @@ void FrameRenderer::set_environment(const Cubemap& environment) {
                     s.transfer->backend(), s.radiance.values.size(), s.radiance.vertices,
                     s.mesh.positions.size()));
   s.environment.emplace(environment);
+  s.background.emplace(background ? *background : environment);
   if (s.shader) {
     t0 = Clock::now();
     s.shader->set_radiance(s.radiance);
-    s.shader->set_background(&*s.environment);
+    s.shader->set_background(&*s.background);
     s.pending.upload_ms += ms_since(t0);
   }
   ++s.counters.relights;
@@ -127,7 +129,7 @@ FrameStats FrameRenderer::render() {
     s.pending.shade_kernel_ms = s.shader->shade();
     s.pending.view_cache_kernel_ms = s.shader->last_view_cache_ms();
   } else {
-    s.image = shade_frame_reference(s.gbuffer, s.mesh, s.materials, s.radiance, &*s.environment,
+    s.image = shade_frame_reference(s.gbuffer, s.mesh, s.materials, s.radiance, &*s.background,
                                     s.options);
   }
   s.pending.shade_ms = ms_since(t0);

@@ -76,8 +76,10 @@ class FrameRenderer {
 
   /// View change: trace and upload the G-buffer. L* is kept.
   void set_camera(const Camera& camera);
-  /// Light change: project, relight, upload L* and the background.
-  void set_environment(const Cubemap& environment);
+  /// Light change: project, relight, upload L* and the background. `background`, when given,
+  /// is what misses show (e.g. a finer cubemap of the same environment); without it misses
+  /// show the lighting cubemap itself.
+  void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
   /// Shade (needs a camera and an environment: ParameterError otherwise).
   FrameStats render();
   /// The last rendered image (read back from the device on the OpenCL path).
