@@ -127,6 +127,21 @@ float prt_sphere_fraction(float3 e, float3 p0, float3 p1) {
   return sum > 0.0f ? d0 / sum : 0.0f;
 }
 
+// The 4 corners (x0, y0), (x1, y0), (x0, y1), (x1, y1) of a grid with row length `stride` and
+// their bilinear weights for fractions (tx, ty): the order of Btf::texel_samples and
+// btf_view_samples.
+void prt_bilinear_corners(int x0, int x1, int y0, int y1, int stride, float tx, float ty,
+                          int* index, float* weight) {
+  index[0] = y0 * stride + x0;
+  index[1] = y0 * stride + x1;
+  index[2] = y1 * stride + x0;
+  index[3] = y1 * stride + x1;
+  weight[0] = (1.0f - tx) * (1.0f - ty);
+  weight[1] = tx * (1.0f - ty);
+  weight[2] = (1.0f - tx) * ty;
+  weight[3] = tx * ty;
+}
+
 // btf_view_samples (btf.h): the 4 view samples around e and their weights, measured on the
 // sphere.
 void prt_view_samples(int side, float3 view, int* views, float* weights) {
@@ -143,14 +158,7 @@ void prt_view_samples(int side, float3 view, int* views, float* weights) {
   if (y0 != y1)
     ty = prt_sphere_fraction(e, prt_square_to_hemisphere(ab.x, prt_sample_centre(y0, side)),
                              prt_square_to_hemisphere(ab.x, prt_sample_centre(y1, side)));
-  views[0] = y0 * side + x0;
-  views[1] = y0 * side + x1;
-  views[2] = y1 * side + x0;
-  views[3] = y1 * side + x1;
-  weights[0] = (1.0f - tx) * (1.0f - ty);
-  weights[1] = tx * (1.0f - ty);
-  weights[2] = (1.0f - tx) * ty;
-  weights[3] = tx * ty;
+  prt_bilinear_corners(x0, x1, y0, y1, side, tx, ty, views, weights);
 }
 
 // x mod 1 in [0, 1]; 0 for a non-finite x (as btf.cpp's fract, not OpenCL's fract()).
@@ -177,14 +185,7 @@ int prt_btf_pairs(ulong base, int4 info, float2 uv, float3 view, ulong* offsets,
   const float tx = fx - x0f, ty = fy - y0f;
   const int x0 = prt_wrap((int)x0f, res), x1 = prt_wrap(x0 + 1, res);
   const int y0 = prt_wrap((int)y0f, res), y1 = prt_wrap(y0 + 1, res);
-  texels[0] = y0 * res + x0;
-  texels[1] = y0 * res + x1;
-  texels[2] = y1 * res + x0;
-  texels[3] = y1 * res + x1;
-  texel_w[0] = (1 - tx) * (1 - ty);
-  texel_w[1] = tx * (1 - ty);
-  texel_w[2] = (1 - tx) * ty;
-  texel_w[3] = tx * ty;
+  prt_bilinear_corners(x0, x1, y0, y1, res, tx, ty, texels, texel_w);
 #else
   const int texel_count = 1;
   const int x = min((int)(prt_fract(uv.x) * (float)res), res - 1);

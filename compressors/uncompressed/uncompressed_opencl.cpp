@@ -74,12 +74,7 @@ class UncompressedDevice final : public DeviceRelighter {
                  "uncompressed light");
     if (rows_ == 0) return 0.0;  // OpenCL forbids an empty launch
     cl::Event event = launch(ctx_, launch_name_, kernel_, range_);
-    return cl_call(ctx_.info().device_name, "timing of kernel " + launch_name_, [&] {
-      event.wait();
-      const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
-      const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
-      return static_cast<double>(end - start) * 1e-6;
-    });
+    return event_milliseconds(event, ctx_.info().device_name, "timing of kernel " + launch_name_);
   }
 
   double relight(const LightCoeffs& light, LocalRadiance& out) override {

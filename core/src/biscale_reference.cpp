@@ -35,14 +35,7 @@ struct FramedMesh {
   const Mesh* mesh = nullptr;
   std::vector<Vec3d> frame_t, frame_n;
 
-  explicit FramedMesh(const Mesh& input) : mesh(&input) {
-    if (input.normals.size() != input.vertex_count() ||
-        input.tangents.size() != input.vertex_count()) {
-      completed = input;
-      if (completed.normals.size() != completed.vertex_count()) compute_smooth_normals(completed);
-      compute_tangents(completed);
-      mesh = &completed;
-    }
+  explicit FramedMesh(const Mesh& input) : mesh(&mesh_with_frames(input, completed)) {
     frame_t.resize(mesh->vertex_count());
     frame_n.resize(mesh->vertex_count());
     for (std::size_t v = 0; v < mesh->vertex_count(); ++v) {

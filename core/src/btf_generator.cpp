@@ -14,6 +14,7 @@
 #include <string>
 
 #include "embree_triangle_scene.h"
+#include "integer_hash.h"
 #include "prtlab/error.h"
 #include "prtlab/hemisphere_grid.h"
 #include "prtlab/local_frame.h"
@@ -36,14 +37,6 @@ constexpr float kSlabMargin = 1e-3f;
 constexpr int kMaxSegments = 4096;
 
 
-std::uint32_t mix32(std::uint32_t v) {
-  v ^= v >> 16;
-  v *= 0x7feb352du;
-  v ^= v >> 15;
-  v *= 0x846ca68bu;
-  v ^= v >> 16;
-  return v;
-}
 
 float unit_float(std::uint32_t v) {
   return static_cast<float>(v >> 8) * (1.0f / 16777216.0f);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "integer_hash.h"
 #include "prtlab/error.h"
 
 namespace prt {
@@ -28,18 +29,6 @@ float smoothstep(float e0, float e1, float x) {
   return t * t * (3.0f - 2.0f * t);
 }
 
-// Integer hash (Jarzynski & Olano 2020, PCG-style) for lattice values: deterministic, no state.
-std::uint32_t hash3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-  std::uint32_t v = x * 1664525u + 1013904223u;
-  v += y * 22695477u;
-  v ^= z * 2654435761u;
-  v ^= v >> 16;
-  v *= 0x7feb352du;
-  v ^= v >> 15;
-  v *= 0x846ca68bu;
-  v ^= v >> 16;
-  return v;
-}
 
 float lattice_value(int i, int j, int period, std::uint32_t octave) {
   const auto wrap = [period](int k) {

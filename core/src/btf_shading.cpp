@@ -48,12 +48,7 @@ int background_pixel(const float* direction, const CubemapLayout* layout, int bl
 }
 
 double event_ms(ClContext& ctx, cl::Event& event, const std::string& name) {
-  return cl_call(ctx.info().device_name, "timing of kernel " + name, [&] {
-    event.wait();
-    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
-    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
-    return static_cast<double>(end - start) * 1e-6;
-  });
+  return event_milliseconds(event, ctx.info().device_name, "timing of kernel " + name);
 }
 
 }  // namespace

@@ -4,9 +4,20 @@
 
 #include <algorithm>
 
+#include "prtlab/cl_error.h"
 #include "prtlab/log.h"
 
 namespace prt {
+
+double event_milliseconds(const cl::Event& event, std::string_view device, std::string_view what) {
+  return cl_call(device, what, [&] {
+    event.wait();
+    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    return static_cast<double>(end - start) * 1e-6;
+  });
+}
+
 namespace {
 
 // Bounded memory in benchmark loops: past this many unresolved events, completed ones are
@@ -47,9 +58,10 @@ void KernelTimer::resolve_locked(bool wait_all) {
     ++s.count;
     try {
       event.wait();
-      const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
-      const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
-      const double ms = static_cast<double>(end - start) * 1e-6;
+      const double ms = static_cast<double>(
+                            event.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
+                            event.getProfilingInfo<CL_PROFILING_COMMAND_START>()) *
+                        1e-6;
       s.min_ms = s.count == 1 ? ms : std::min(s.min_ms, ms);
       s.max_ms = std::max(s.max_ms, ms);
       s.total_ms += ms;

@@ -60,15 +60,8 @@ struct GBufferTracer::Impl {
 
 GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()) {
   if (input.triangle_count() == 0) throw ParameterError("GBufferTracer: the mesh has no triangles");
-  const Mesh* mesh = &input;
   Mesh completed;
-  if (input.normals.size() != input.vertex_count() ||
-      input.tangents.size() != input.vertex_count()) {
-    completed = input;
-    if (completed.normals.size() != completed.vertex_count()) compute_smooth_normals(completed);
-    compute_tangents(completed);
-    mesh = &completed;
-  }
+  const Mesh* mesh = &mesh_with_frames(input, completed);
   Impl& im = *impl_;
   im.indices = mesh->indices;
   im.triangle_part = mesh->triangle_part;

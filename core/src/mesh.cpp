@@ -124,6 +124,16 @@ std::vector<std::uint32_t> position_representatives(const Mesh& mesh) {
   return rep;
 }
 
+const Mesh& mesh_with_frames(const Mesh& input, Mesh& storage) {
+  if (input.normals.size() == input.vertex_count() &&
+      input.tangents.size() == input.vertex_count())
+    return input;
+  storage = input;
+  if (storage.normals.size() != storage.vertex_count()) compute_smooth_normals(storage);
+  compute_tangents(storage);
+  return storage;
+}
+
 void compute_smooth_normals(Mesh& mesh) {
   const std::size_t n = mesh.vertex_count();
   std::vector<Vec3d> acc(n, Vec3d(0.0));

@@ -17,6 +17,10 @@
 
 namespace prt {
 
+/// Waits for `event` and returns its device execution time in milliseconds
+/// (CL_PROFILING_COMMAND_END - START). Errors become ClError naming `device` and `what`.
+double event_milliseconds(const cl::Event& event, std::string_view device, std::string_view what);
+
 class KernelTimer {
  public:
   struct Stats {

@@ -45,6 +45,11 @@ struct Mesh {
   void append(const Mesh& other, std::uint16_t part);
 };
 
+/// `input` itself when it has a normal and a tangent for every vertex; otherwise a copy with
+/// the missing ones computed (compute_smooth_normals, compute_tangents), kept in `storage`.
+/// The frames (Mesh::frame) of the result are the ones T, the G-buffer and the references use.
+const Mesh& mesh_with_frames(const Mesh& input, Mesh& storage);
+
 /// Angle-weighted smooth vertex normals (Thürmer and Wüthrich 1998). Vertices that share a
 /// position but not an index (UV seams) are smoothed together when their own normals are
 /// within 60 degrees of each other, so seams do not show while split hard edges (a box's
