@@ -202,8 +202,7 @@ void run_render(const RenderCli& o) {
   // The lighting cubemap is coarse (R = 32 for the paper scenes); the background would show
   // its pixels as blocks, so misses look up a finer resampling of the same environment.
   const Cubemap background = resample_to_cubemap(
-      o.rotate_deg == 0.0 ? p.env : rotate_latlong_y(p.env, o.rotate_deg),
-      o.background_resolution);
+      o.rotate_deg == 0.0 ? p.env : rotate_latlong_y(p.env, o.rotate_deg), o.background_resolution);
   FrameRenderer renderer(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr,
                          p.shading);
   renderer.set_camera(p.camera);

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-#include <optional>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "embree_triangle_scene.h"
@@ -35,8 +35,6 @@ constexpr float kSlabMargin = 1e-3f;
 // A ray crosses at most this many tile sides: even a shadow ray at 1 degree above the horizon
 // rises out of a 0.1-high structure within about 6 tiles.
 constexpr int kMaxSegments = 4096;
-
-
 
 float unit_float(std::uint32_t v) {
   return static_cast<float>(v >> 8) * (1.0f / 16777216.0f);

@@ -29,7 +29,6 @@ float smoothstep(float e0, float e1, float x) {
   return t * t * (3.0f - 2.0f * t);
 }
 
-
 float lattice_value(int i, int j, int period, std::uint32_t octave) {
   const auto wrap = [period](int k) {
     return static_cast<std::uint32_t>(((k % period) + period) % period);

@@ -58,9 +58,8 @@ void KernelTimer::resolve_locked(bool wait_all) {
     ++s.count;
     try {
       event.wait();
-      const double ms = static_cast<double>(
-                            event.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
-                            event.getProfilingInfo<CL_PROFILING_COMMAND_START>()) *
+      const double ms = static_cast<double>(event.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
+                                            event.getProfilingInfo<CL_PROFILING_COMMAND_START>()) *
                         1e-6;
       s.min_ms = s.count == 1 ? ms : std::min(s.min_ms, ms);
       s.max_ms = std::max(s.max_ms, ms);

@@ -20,7 +20,6 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr int kTile = 16;
 
-
 void put4(std::vector<float>& a, std::size_t i, const Vec3d& v) {
   a[4 * i + 0] = static_cast<float>(v.x);
   a[4 * i + 1] = static_cast<float>(v.y);

@@ -125,8 +125,7 @@ std::vector<std::uint32_t> position_representatives(const Mesh& mesh) {
 }
 
 const Mesh& mesh_with_frames(const Mesh& input, Mesh& storage) {
-  if (input.normals.size() == input.vertex_count() &&
-      input.tangents.size() == input.vertex_count())
+  if (input.normals.size() == input.vertex_count() && input.tangents.size() == input.vertex_count())
     return input;
   storage = input;
   if (storage.normals.size() != storage.vertex_count()) compute_smooth_normals(storage);

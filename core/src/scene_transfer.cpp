@@ -1,11 +1,11 @@
 #include "prtlab/scene_transfer.h"
 
+#include <toml++/toml.h>
+
 #include <chrono>
 #include <fstream>
 #include <iterator>
 #include <sstream>
-
-#include <toml++/toml.h>
 
 #include "prtlab/data_paths.h"
 #include "prtlab/error.h"

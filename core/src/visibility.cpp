@@ -89,10 +89,7 @@ void SupersampledCubemap::subpixel_bounds(std::size_t r, int& face, double& s0, 
 
 // ---------------------------------------------------------------------------------------------
 
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 struct EmbreeScene::Impl {
   EmbreeTriangleScene embree;

@@ -63,8 +63,8 @@ double env_value(const Config& c, const Vec3d& w) {
 /// The value the generator stores for light cell j (btf.h "Units"): the response at the cell
 /// centre d, with the macro cosine replaced by the cell-mean cosine P_j / Omega_j.
 double sampled_value(const Config& c, const HemisphereGrid& grid, int j, const Vec3d& d) {
-  const double mean_cos = grid.projected_solid_angles()[static_cast<std::size_t>(j)] /
-                          grid.cell_solid_angle();
+  const double mean_cos =
+      grid.projected_solid_angles()[static_cast<std::size_t>(j)] / grid.cell_solid_angle();
   return btf_value(c, d) / d.z * mean_cos;
 }
 

@@ -149,8 +149,8 @@ TEST_F(TransferFiles, ViewOnlyEditKeepsTheSceneInputHash) {
     return parse_scene(p);
   };
   const Hash128 base = scene_input_hash(write("a.toml", text));
-  const Hash128 more_views =
-      scene_input_hash(write("b.toml", text + "\n[[view]]\nname = \"side\"\nfrom = [1.0, 0.2, 0.0]\n"));
+  const Hash128 more_views = scene_input_hash(
+      write("b.toml", text + "\n[[view]]\nname = \"side\"\nfrom = [1.0, 0.2, 0.0]\n"));
   EXPECT_EQ(base, more_views);
   std::string finer = text;
   const auto at = finer.find("cubemap_resolution = 8");

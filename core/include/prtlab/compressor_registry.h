@@ -30,7 +30,8 @@ struct CompressorEntry {
   std::string name;
   std::string description;        ///< one line: the method and its paper
   std::vector<ParamSpec> params;  ///< backend-specific; shared ones are added by ParamSet
-  bool lossless = false;  ///< at default parameters, relight equals the exact product up to float rounding
+  bool lossless =
+      false;  ///< at default parameters, relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
   std::function<std::unique_ptr<CompressedTransfer>(const ArchiveReader&)> load;
   std::string origin = "built-in";  ///< "built-in" or the plugin's path
