@@ -4,10 +4,9 @@
 #include "paper_table.h"
 
 #include <gtest/gtest.h>
-
-#include <cctype>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
