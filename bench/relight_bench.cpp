@@ -307,6 +307,12 @@ void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const
     state.SkipWithError(p->device_error.c_str());
     return;
   }
+  // Warm up before timing, every time (300 ms): the benchmark that ran just before (TBB's C++
+  // relights, another variant) leaves threads and caches in another state. Without it the
+  // medians of two identical variants (bicluster default and opencl_ids=u32 on a CPU) differed
+  // by up to 1.6x, depending on which ran first (2026-12-01).
+  const auto warm_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
+  while (std::chrono::steady_clock::now() < warm_until) p->device->relight_on_device(p->coeffs);
   double total = 0;
   for (auto _ : state) {
     const double s = p->device->relight_on_device(p->coeffs) * 1e-3;
