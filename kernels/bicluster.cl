@@ -44,6 +44,21 @@ __kernel PRT_WG_ATTR void bicluster_phase1(const uint biclusters, const uint las
   }
 }
 
+// The 4 rows of slice s: local rows j < m (padding lanes hold j >= m) of the slice's vertex,
+// times 1/s^2.
+void prt_store_slice(const uint s, const uint slices_per_vertex, const uint m, const float scale,
+                     __global const PRT_LANE_T* restrict slice_rows, const float4 a0,
+                     const float4 a1, const float4 a2, const float4 a3,
+                     __global float* restrict out) {
+  const uint base = (s / slices_per_vertex) * m;
+  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
+             j3 = slice_rows[4 * s + 3];
+  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
+  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
+  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
+  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
+}
+
 __kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint slices_per_vertex,
                                            const uint m, const float scale,
                                            __global const uint* restrict slice_offsets,
@@ -70,13 +85,7 @@ __kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint slices_
     a2 += products[i2];
     a3 += products[i3];
   }
-  const uint base = (s / slices_per_vertex) * m;
-  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
-             j3 = slice_rows[4 * s + 3];
-  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
-  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
-  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
-  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
+  prt_store_slice(s, slices_per_vertex, m, scale, slice_rows, a0, a1, a2, a3, out);
 }
 
 // The same with the lanes' ids expanded to u32 at upload (opencl_ids=u32): no decoding.
@@ -98,11 +107,5 @@ __kernel PRT_WG_ATTR void bicluster_phase2_ids(const uint slices, const uint sli
     a2 += products[id.s2];
     a3 += products[id.s3];
   }
-  const uint base = (s / slices_per_vertex) * m;
-  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
-             j3 = slice_rows[4 * s + 3];
-  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
-  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
-  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
-  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
+  prt_store_slice(s, slices_per_vertex, m, scale, slice_rows, a0, a1, a2, a3, out);
 }
