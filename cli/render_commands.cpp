@@ -44,12 +44,12 @@ struct SceneCli {
   std::string filter = "nearest";
   int btf_resolution = 32;
   bool no_background = false;
-  int background_resolution = 256;
   bool no_view_cache = false;
   bool json = false;
 };
 
 struct RenderCli : SceneCli {
+  int background_resolution = 256;
   std::string out;
   std::string png;
   double exposure = 0;
@@ -82,10 +82,6 @@ void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("--btf-resolution", o.btf_resolution, "BTF texels per side (generated, cached)")
       ->check(CLI::Range(1, 1024));
   c->add_flag("--no-background", o.no_background, "Black background instead of the environment");
-  c->add_option("--background-res", o.background_resolution,
-                "Cubemap resolution of the background misses show (render only; the lighting "
-                "uses the scene's resolution)")
-      ->check(CLI::Range(1, 2048));
   c->add_flag("--no-view-cache", o.no_view_cache,
               "Shade in one kernel pass instead of caching b(u, e) per pixel on a view change");
   c->add_flag("--json", o.json, "Machine-readable output (docs/cli.md)");
@@ -546,6 +542,9 @@ void add_render_commands(CLI::App& app) {
       ->required();
   r->add_option("--png", ro->png, "Where to write the tone-mapped PNG (default: --out as .png)");
   r->add_option("--exposure", ro->exposure, "PNG exposure in stops (after auto exposure)");
+  r->add_option("--background-res", ro->background_resolution,
+                "Cubemap resolution of what misses show (the lighting uses the scene's)")
+      ->check(CLI::Range(1, 2048));
   r->callback([ro] { run_render(*ro); });
 
   auto fo = std::make_shared<FpsCli>();
