@@ -22,9 +22,13 @@
 // printed at the end.
 //
 //   POCL_MAX_PTHREAD_COUNT=2 POCL_CPU_MAX_CU_COUNT=2 POCL_AFFINITY=1
-//     build/<dir>/bench/relight_bench --benchmark_repetitions=5
+//     build/<dir>/bench/relight_bench --benchmark_repetitions=10
+//       --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true
 //       --benchmark_out=results/bench/relight.json --benchmark_out_format=json
-//   (one command line)
+//   (one command line). Random interleaving spreads every benchmark's repetitions over the whole
+//   run: the VMs here have slow periods of a few seconds that hit the bicluster relight (C++
+//   and OpenCL) 1.5-1.8x and not the uncompressed one, and in registration order they fell on
+//   whichever benchmarks ran then (docs/backends/bicluster.md, "Noise").
 //
 // The bunny's transfer comes from the stage cache ($PRTLAB_CACHE), computed on the first run;
 // without the bunny's data, a synthetic matrix of its shape (210,304 x 6,144, ~8.7 M non-zeros)

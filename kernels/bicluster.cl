@@ -4,12 +4,13 @@
 //   bicluster_phase1   one work-item per bicluster: P_i = sum_m t_m L[k_m] (float4 RGB; zero
 //                      slots have no columns: 0); the extra work-item i = B zeroes the zero slot
 //                      at or above B, which pads lanes
-//   bicluster_phase2   one work-item per slice of 4 rows (SELL-4): a fixed-length loop over the
-//                      slice's steps, each lane adding its u16 delta to its id and then P_id
-//                      (one accumulator per row), then each row times 1/s^2
+//   bicluster_phase2   one work-item per slice of 4 rows (SELL-4, rows in phase 2's row order):
+//                      a fixed-length loop over the slice's steps, each lane adding its u16
+//                      delta to its id and then P_id (one accumulator per row), then each row
+//                      times 1/s^2 to its place in the output
 //   bicluster_phase2_ids  the same over u32 ids expanded at upload (opencl_ids=u32)
 //
-// Host defines: PRT_COLUMN_T (ushort or uint), PRT_LANE_T (uchar or ushort), PRT_WG_SIZE.
+// Host defines: PRT_COLUMN_T (ushort or uint), PRT_WG_SIZE.
 // Constants are signed 16-bit counts. The light and P are float4 (RGB + pad); the output is
 // packed RGB.
 
@@ -18,9 +19,6 @@
 #endif
 #ifndef PRT_PHASE1_PER_ITEM
 #define PRT_PHASE1_PER_ITEM 8
-#endif
-#ifndef PRT_LANE_T
-#define PRT_LANE_T uchar
 #endif
 
 __kernel PRT_WG_ATTR void bicluster_phase1(const uint biclusters, const uint last_zero,
@@ -44,25 +42,20 @@ __kernel PRT_WG_ATTR void bicluster_phase1(const uint biclusters, const uint las
   }
 }
 
-// The 4 rows of slice s: local rows j < m (padding lanes hold j >= m) of the slice's vertex,
-// times 1/s^2.
-void prt_store_slice(const uint s, const uint slices_per_vertex, const uint m, const float scale,
-                     __global const PRT_LANE_T* restrict slice_rows, const float4 a0,
-                     const float4 a1, const float4 a2, const float4 a3,
-                     __global float* restrict out) {
-  const uint base = (s / slices_per_vertex) * m;
-  const uint j0 = slice_rows[4 * s], j1 = slice_rows[4 * s + 1], j2 = slice_rows[4 * s + 2],
-             j3 = slice_rows[4 * s + 3];
-  if (j0 < m) prt_store_rgb3(out, base + j0, a0 * scale);
-  if (j1 < m) prt_store_rgb3(out, base + j1, a1 * scale);
-  if (j2 < m) prt_store_rgb3(out, base + j2, a2 * scale);
-  if (j3 < m) prt_store_rgb3(out, base + j3, a3 * scale);
+// The 4 rows of slice s (lanes holding row `rows` are padding), times 1/s^2.
+void prt_store_slice(const uint s, const uint rows, const float scale,
+                     __global const uint* restrict slice_rows, const float4 a0, const float4 a1,
+                     const float4 a2, const float4 a3, __global float* restrict out) {
+  const uint4 r = vload4(s, slice_rows);
+  if (r.s0 < rows) prt_store_rgb3(out, r.s0, a0 * scale);
+  if (r.s1 < rows) prt_store_rgb3(out, r.s1, a1 * scale);
+  if (r.s2 < rows) prt_store_rgb3(out, r.s2, a2 * scale);
+  if (r.s3 < rows) prt_store_rgb3(out, r.s3, a3 * scale);
 }
 
-__kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint slices_per_vertex,
-                                           const uint m, const float scale,
+__kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint rows, const float scale,
                                            __global const uint* restrict slice_offsets,
-                                           __global const PRT_LANE_T* restrict slice_rows,
+                                           __global const uint* restrict slice_rows,
                                            __global const uint* restrict slice_base,
                                            __global const ushort* restrict codes,
                                            __global const float4* restrict products,
@@ -85,14 +78,14 @@ __kernel PRT_WG_ATTR void bicluster_phase2(const uint slices, const uint slices_
     a2 += products[i2];
     a3 += products[i3];
   }
-  prt_store_slice(s, slices_per_vertex, m, scale, slice_rows, a0, a1, a2, a3, out);
+  prt_store_slice(s, rows, scale, slice_rows, a0, a1, a2, a3, out);
 }
 
 // The same with the lanes' ids expanded to u32 at upload (opencl_ids=u32): no decoding.
-__kernel PRT_WG_ATTR void bicluster_phase2_ids(const uint slices, const uint slices_per_vertex,
-                                               const uint m, const float scale,
+__kernel PRT_WG_ATTR void bicluster_phase2_ids(const uint slices, const uint rows,
+                                               const float scale,
                                                __global const uint* restrict slice_offsets,
-                                               __global const PRT_LANE_T* restrict slice_rows,
+                                               __global const uint* restrict slice_rows,
                                                __global const uint* restrict ids,
                                                __global const float4* restrict products,
                                                __global float* restrict out) {
@@ -107,5 +100,5 @@ __kernel PRT_WG_ATTR void bicluster_phase2_ids(const uint slices, const uint sli
     a2 += products[id.s2];
     a3 += products[id.s3];
   }
-  prt_store_slice(s, slices_per_vertex, m, scale, slice_rows, a0, a1, a2, a3, out);
+  prt_store_slice(s, rows, scale, slice_rows, a0, a1, a2, a3, out);
 }

@@ -85,16 +85,44 @@ std::vector<std::uint32_t> offsets_from(const std::vector<std::uint32_t>& sizes)
   return off;
 }
 
-// Lane order of a vertex's rows: more biclusters first (ties: smaller j), so that the rows of a
-// slice have similar lengths and the padding stays small (~5 % on the bunny).
-std::vector<std::uint16_t> lane_order(const std::vector<std::uint32_t>& row_offsets,
-                                      std::size_t vertex, int m) {
-  std::vector<std::uint16_t> order(static_cast<std::size_t>(m));
-  std::iota(order.begin(), order.end(), std::uint16_t{0});
-  const std::size_t base = vertex * static_cast<std::size_t>(m);
-  auto length = [&](std::uint16_t j) { return row_offsets[base + j + 1] - row_offsets[base + j]; };
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::uint16_t x, std::uint16_t y) { return length(x) > length(y); });
+// Phase 2's row order. Consecutive rows should gather the same products, so that P (16 bytes
+// per bicluster: 1.5 MB on the bunny, more than a core's L2 here) is read from L1/L2 rather
+// than from L3 or memory. A bicluster's rows are one local direction of many vertices, so the
+// rows of one vertex share almost nothing (1,075 distinct products in its 1,079 gathers on the
+// bunny): vertex by vertex, half of the gathers came from beyond the L2, and a process
+// streaming memory on the other core made the relight 2x slower. Here biclusters take, largest
+// first (ties: search order), their rows not yet placed; rows without a bicluster come last.
+// Then, within windows of kRowWindow rows, longer rows first, so that the four lanes of a slice
+// have similar lengths (less padding). docs/backends/bicluster.md, "Row order", has the
+// measurements.
+std::vector<std::uint32_t> phase2_row_order(std::size_t rows,
+                                            const std::vector<std::uint32_t>& sizes,
+                                            const std::vector<std::uint32_t>& row_off,
+                                            const auto& rows_of) {
+  std::vector<std::uint32_t> by_size(sizes.size());
+  std::iota(by_size.begin(), by_size.end(), std::uint32_t{0});
+  std::stable_sort(by_size.begin(), by_size.end(),
+                   [&](std::uint32_t x, std::uint32_t y) { return sizes[x] > sizes[y]; });
+  std::vector<std::uint8_t> placed(rows, 0);
+  std::vector<std::uint32_t> order;
+  order.reserve(rows);
+  for (std::uint32_t i : by_size) {
+    rows_of(i, [&](std::uint32_t j) {
+      if (!placed[j]) {
+        placed[j] = 1;
+        order.push_back(j);
+      }
+    });
+  }
+  for (std::size_t j = 0; j < rows; ++j)
+    if (!placed[j]) order.push_back(static_cast<std::uint32_t>(j));
+  auto length = [&](std::uint32_t j) { return row_off[j + 1] - row_off[j]; };
+  for (std::size_t w = 0; w < order.size(); w += kRowWindow) {
+    std::stable_sort(
+        order.begin() + static_cast<std::ptrdiff_t>(w),
+        order.begin() + static_cast<std::ptrdiff_t>(std::min(w + kRowWindow, order.size())),
+        [&](std::uint32_t x, std::uint32_t y) { return length(x) > length(y); });
+  }
   return order;
 }
 
@@ -144,9 +172,7 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
   a.local_count = t.local_count();
   a.pixel_count = static_cast<int>(t.cols());
   a.supersampling = t.supersampling();
-  PRT_CHECK(a.local_count <= 65535, "M = {} does not fit the u16 lane rows", a.local_count);
   const std::size_t rows = a.rows();
-  const std::size_t m = static_cast<std::size_t>(a.local_count);
 
   // Residual terms as 1x1 biclusters, after the biclusters. A position can be seeded as a
   // residual term more than once (a later bicluster may leave a residual where an earlier seed
@@ -177,22 +203,24 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
       rows_of(i, [&](std::uint32_t j) { row_ids[fill[j]++] = static_cast<std::uint32_t>(i); });
   }
 
-  // Numbering by first use in phase 2's order: vertices in order, lanes in slice order.
-  std::vector<std::vector<std::uint16_t>> orders(a.vertices);
+  std::vector<std::uint32_t> sizes(nb);
+  for (std::size_t i = 0; i < nb; ++i)
+    sizes[i] =
+        i < b.biclusters.size() ? static_cast<std::uint32_t>(b.biclusters[i].rows.size()) : 1;
+  PRT_CHECK(rows < std::numeric_limits<std::uint32_t>::max(), "{} rows exceed u32 ids", rows);
+  const std::vector<std::uint32_t> order = phase2_row_order(rows, sizes, row_off, rows_of);
+
+  // Numbering by first use in phase 2's order, skipping the zero slots.
   std::vector<std::uint32_t> renumber(nb, std::numeric_limits<std::uint32_t>::max());
   std::uint64_t next = 1;  // id 0 is the first zero slot
   std::size_t numbered = 0;
-  for (std::size_t v = 0; v < a.vertices; ++v) {
-    orders[v] = lane_order(row_off, v, a.local_count);
-    for (std::uint16_t j : orders[v]) {
-      const std::size_t row = v * m + j;
-      for (std::uint32_t q = row_off[row]; q < row_off[row + 1]; ++q) {
-        if (renumber[row_ids[q]] != std::numeric_limits<std::uint32_t>::max()) continue;
-        if (next % kZeroStride == 0) ++next;
-        PRT_CHECK(next < std::numeric_limits<std::uint32_t>::max(), "bicluster ids exceed u32");
-        renumber[row_ids[q]] = static_cast<std::uint32_t>(next++);
-        ++numbered;
-      }
+  for (std::uint32_t row : order) {
+    for (std::uint32_t q = row_off[row]; q < row_off[row + 1]; ++q) {
+      if (renumber[row_ids[q]] != std::numeric_limits<std::uint32_t>::max()) continue;
+      if (next % kZeroStride == 0) ++next;
+      PRT_CHECK(next < std::numeric_limits<std::uint32_t>::max(), "bicluster ids exceed u32");
+      renumber[row_ids[q]] = static_cast<std::uint32_t>(next++);
+      ++numbered;
     }
   }
   PRT_CHECK(numbered == nb, "{} of {} biclusters have no row", nb - numbered, nb);
@@ -224,73 +252,71 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
     a.bic_col_offsets.push_back(static_cast<std::uint32_t>(a.bic_columns.size()));
   }
 
-  // Phase 2: SELL-4 per vertex, lanes delta-coded from the smallest id of the slice.
-  const std::size_t spv = a.slices_per_vertex();
-  a.slice_rows.reserve(a.vertices * spv * kSliceRows);
-  a.slice_offsets.reserve(a.vertices * spv + 1);
-  a.slice_base.reserve(a.vertices * spv);
+  // Phase 2: SELL-4 over the rows in phase 2's order, lanes delta-coded from the smallest id of
+  // the slice.
+  const std::size_t slices = a.slice_count_for_rows();
+  a.slice_rows.reserve(slices * kSliceRows);
+  a.slice_offsets.reserve(slices + 1);
+  a.slice_base.reserve(slices);
   a.slice_codes.reserve(row_ids.size() + row_ids.size() / 8);
   std::vector<std::uint16_t> lane_codes[kSliceRows];
-  for (std::size_t v = 0; v < a.vertices; ++v) {
-    for (std::size_t s = 0; s < spv; ++s) {
-      std::uint32_t begin[kSliceRows] = {}, length[kSliceRows] = {};
-      std::uint32_t base = std::numeric_limits<std::uint32_t>::max();
-      for (int lane = 0; lane < kSliceRows; ++lane) {
-        const std::size_t slot = s * kSliceRows + static_cast<std::size_t>(lane);
-        if (slot >= m) {
-          a.slice_rows.push_back(static_cast<std::uint16_t>(m));
-          continue;
-        }
-        const std::uint16_t j = orders[v][slot];
-        const std::size_t row = v * m + j;
-        a.slice_rows.push_back(j);
-        begin[lane] = row_off[row];
-        length[lane] = row_off[row + 1] - row_off[row];
-        if (length[lane] > 0) base = std::min(base, row_ids[begin[lane]]);
+  for (std::size_t s = 0; s < slices; ++s) {
+    std::uint32_t begin[kSliceRows] = {}, length[kSliceRows] = {};
+    std::uint32_t base = std::numeric_limits<std::uint32_t>::max();
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      const std::size_t slot = s * kSliceRows + static_cast<std::size_t>(lane);
+      if (slot >= rows) {
+        a.slice_rows.push_back(static_cast<std::uint32_t>(rows));
+        continue;
       }
-      if (base == std::numeric_limits<std::uint32_t>::max()) base = 0;  // empty: a zero slot
-      // Each lane: deltas to its ids, crossing gaps of 2^16 or more through zero slots, then
-      // onto a zero slot and zero deltas as padding up to the slice's length.
-      auto next_zero = [](std::uint32_t id) { return (id / kZeroStride + 1) * kZeroStride; };
-      std::size_t longest = 0;
-      std::uint32_t lane_end[kSliceRows];
-      for (int lane = 0; lane < kSliceRows; ++lane) {
-        auto& codes = lane_codes[lane];
-        codes.clear();
-        std::uint32_t id = base;
-        for (std::uint32_t q = 0; q < length[lane]; ++q) {
-          const std::uint32_t target = row_ids[begin[lane] + q];
-          if (target - id > 0xffff) {
-            const std::uint32_t z = next_zero(id);
-            codes.push_back(static_cast<std::uint16_t>(z - id));
-            id = z;
-            while (target - id > 0xffff) {
-              codes.push_back(static_cast<std::uint16_t>(kZeroStride));
-              id += kZeroStride;
-            }
-          }
-          codes.push_back(static_cast<std::uint16_t>(target - id));
-          id = target;
-        }
-        lane_end[lane] = id;
-        longest = std::max(longest, codes.size());
-      }
-      for (int lane = 0; lane < kSliceRows; ++lane) {
-        auto& codes = lane_codes[lane];
-        if (codes.size() == longest) continue;
-        // An empty lane sits at the slice's base, a real bicluster (or zero when the slice is
-        // empty, then longest = 0): step to the next zero slot first.
-        const std::uint32_t id = lane_end[lane];
-        codes.push_back(static_cast<std::uint16_t>(id % kZeroStride == 0 ? 0 : next_zero(id) - id));
-        codes.resize(longest, 0);
-      }
-      for (std::size_t q = 0; q < longest; ++q)
-        for (const auto& codes : lane_codes) a.slice_codes.push_back(codes[q]);
-      PRT_CHECK(a.slice_codes.size() <= std::numeric_limits<std::uint32_t>::max(),
-                "more than 2^32 - 1 slice codes");
-      a.slice_base.push_back(base);
-      a.slice_offsets.push_back(static_cast<std::uint32_t>(a.slice_codes.size()));
+      const std::uint32_t row = order[slot];
+      a.slice_rows.push_back(row);
+      begin[lane] = row_off[row];
+      length[lane] = row_off[row + 1] - row_off[row];
+      if (length[lane] > 0) base = std::min(base, row_ids[begin[lane]]);
     }
+    if (base == std::numeric_limits<std::uint32_t>::max()) base = 0;  // empty: a zero slot
+    // Each lane: deltas to its ids, crossing gaps of 2^16 or more through zero slots, then
+    // onto a zero slot and zero deltas as padding up to the slice's length.
+    auto next_zero = [](std::uint32_t id) { return (id / kZeroStride + 1) * kZeroStride; };
+    std::size_t longest = 0;
+    std::uint32_t lane_end[kSliceRows];
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      auto& codes = lane_codes[lane];
+      codes.clear();
+      std::uint32_t id = base;
+      for (std::uint32_t q = 0; q < length[lane]; ++q) {
+        const std::uint32_t target = row_ids[begin[lane] + q];
+        if (target - id > 0xffff) {
+          const std::uint32_t z = next_zero(id);
+          codes.push_back(static_cast<std::uint16_t>(z - id));
+          id = z;
+          while (target - id > 0xffff) {
+            codes.push_back(static_cast<std::uint16_t>(kZeroStride));
+            id += kZeroStride;
+          }
+        }
+        codes.push_back(static_cast<std::uint16_t>(target - id));
+        id = target;
+      }
+      lane_end[lane] = id;
+      longest = std::max(longest, codes.size());
+    }
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      auto& codes = lane_codes[lane];
+      if (codes.size() == longest) continue;
+      // An empty lane sits at the slice's base, a real bicluster (or zero when the slice is
+      // empty, then longest = 0): step to the next zero slot first.
+      const std::uint32_t id = lane_end[lane];
+      codes.push_back(static_cast<std::uint16_t>(id % kZeroStride == 0 ? 0 : next_zero(id) - id));
+      codes.resize(longest, 0);
+    }
+    for (std::size_t q = 0; q < longest; ++q)
+      for (const auto& codes : lane_codes) a.slice_codes.push_back(codes[q]);
+    PRT_CHECK(a.slice_codes.size() <= std::numeric_limits<std::uint32_t>::max(),
+              "more than 2^32 - 1 slice codes");
+    a.slice_base.push_back(base);
+    a.slice_offsets.push_back(static_cast<std::uint32_t>(a.slice_codes.size()));
   }
   return a;
 }
@@ -307,14 +333,10 @@ SparseCounts reconstruct(const BiclusterArrays& a) {
       b.biclusters[i].constants.push_back(a.bic_constants[p]);
     }
   }
-  const std::size_t m = static_cast<std::size_t>(a.local_count);
   for (std::size_t s = 0; s < a.slice_count(); ++s) {
-    const std::size_t v = s / a.slices_per_vertex();
     for (int lane = 0; lane < kSliceRows; ++lane) {
-      const std::size_t j = a.slice_rows[s * kSliceRows + static_cast<std::size_t>(lane)];
-      a.for_each_id(s, lane, [&](std::uint32_t id) {
-        b.biclusters.at(id).rows.push_back(static_cast<std::uint32_t>(v * m + j));
-      });
+      const std::uint32_t row = a.slice_rows[s * kSliceRows + static_cast<std::size_t>(lane)];
+      a.for_each_id(s, lane, [&](std::uint32_t id) { b.biclusters.at(id).rows.push_back(row); });
     }
   }
   // Biclustering::reconstruct sums per position (zero slots add nothing); the row order within
@@ -328,8 +350,8 @@ BiclusterTransfer::BiclusterTransfer(BiclusterArrays arrays)
 StorageReport BiclusterTransfer::storage() const {
   const std::uint64_t col_bytes = narrow() ? 2 : 4;
   const std::string col_type = narrow() ? "u16" : "u32";
-  const std::uint64_t lane_bytes = narrow_rows() ? 1 : 2;
-  const std::string lane_type = narrow_rows() ? "u8" : "u16";
+  const std::uint64_t lane_bytes = narrow_rows() ? 2 : 4;
+  const std::string lane_type = narrow_rows() ? "u16" : "u32";
   StorageReport r;
   r.components.push_back({"bic_col_offsets", a_.bic_col_offsets.size() * std::uint64_t{4},
                           "u32 per bicluster + 1: first entry of its columns/constants"});
@@ -339,8 +361,9 @@ StorageReport BiclusterTransfer::storage() const {
                           "i16 per bicluster column: constant t_m as a signed count (x 1/s^2)"});
   r.components.push_back({"slice_offsets", a_.slice_offsets.size() * std::uint64_t{4},
                           "u32 per slice of 4 rows + 1: first entry of the slice's codes"});
-  r.components.push_back({"slice_rows", a_.slice_rows.size() * lane_bytes,
-                          lane_type + " per slice lane: the lane's local row j (M: no row)"});
+  r.components.push_back(
+      {"slice_rows", a_.slice_rows.size() * lane_bytes,
+       lane_type + " per slice lane: the lane's row (rows: none), phase 2's row order"});
   r.components.push_back({"slice_base", a_.slice_base.size() * std::uint64_t{4},
                           "u32 per slice: the smallest bicluster id of its lanes"});
   r.components.push_back(
@@ -399,8 +422,6 @@ void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) co
   // Phase 2 (lines 4-11): per slice, four rows gathered in lockstep. Each row is summed by one
   // task in a fixed order, so the result does not depend on the thread count.
   const float scale = static_cast<float>(a_.scale());
-  const std::size_t spv = a_.slices_per_vertex();
-  const std::size_t m = static_cast<std::size_t>(a_.local_count);
   const F4* pp = p.get();
   const std::uint16_t* codes = a_.slice_codes.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a_.slice_count(), 512),
@@ -421,12 +442,11 @@ void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) co
                           a3 += pp[i3];
                         }
                         const F4 acc[kSliceRows] = {a0, a1, a2, a3};
-                        const std::size_t base = (s / spv) * m;
                         for (int lane = 0; lane < kSliceRows; ++lane) {
-                          const std::size_t j = a_.slice_rows[s * kSliceRows + lane];
-                          if (j >= m) continue;
+                          const std::uint32_t row = a_.slice_rows[s * kSliceRows + lane];
+                          if (row >= rows) continue;
                           const F4 v = acc[lane] * scale;
-                          out.values[base + j] = Rgb(v[0], v[1], v[2]);
+                          out.values[row] = Rgb(v[0], v[1], v[2]);
                         }
                       }
                     });
@@ -447,21 +467,14 @@ void add_narrowed(ArchiveWriter& w, const std::string& name, const std::vector<s
   }
 }
 
-std::vector<std::uint32_t> read_columns(const ArchiveReader& r, const std::string& name) {
+// A section written by add_narrowed, as u32 (count: the expected size, or any when 0).
+std::vector<std::uint32_t> read_widened(const ArchiveReader& r, const std::string& name,
+                                        std::size_t count = 0) {
   if (r.section_info(name).type == ElementType::kUInt16) {
-    const auto v = r.view<std::uint16_t>(name);
+    const auto v = count ? r.view<std::uint16_t>(name, count) : r.view<std::uint16_t>(name);
     return {v.begin(), v.end()};
   }
-  return r.section<std::uint32_t>(name);
-}
-
-std::vector<std::uint16_t> read_lanes(const ArchiveReader& r, const std::string& name,
-                                      std::size_t count) {
-  if (r.section_info(name).type == ElementType::kUInt8) {
-    const auto v = r.view<std::uint8_t>(name, count);
-    return {v.begin(), v.end()};
-  }
-  return r.section<std::uint16_t>(name, count);
+  return count ? r.section<std::uint32_t>(name, count) : r.section<std::uint32_t>(name);
 }
 }  // namespace
 
@@ -478,12 +491,7 @@ void BiclusterTransfer::save(ArchiveWriter& w) const {
   add_narrowed(w, "bic_columns", a_.bic_columns, narrow());
   w.add_section("bic_constants", a_.bic_constants);
   w.add_section("slice_offsets", a_.slice_offsets);
-  if (narrow_rows()) {
-    w.add_section("slice_rows",
-                  std::vector<std::uint8_t>(a_.slice_rows.begin(), a_.slice_rows.end()));
-  } else {
-    w.add_section("slice_rows", a_.slice_rows);
-  }
+  add_narrowed(w, "slice_rows", a_.slice_rows, narrow_rows());
   w.add_section("slice_base", a_.slice_base);
   w.add_section("slice_codes", a_.slice_codes);
 }
@@ -506,17 +514,18 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   } catch (const ParameterError& e) {
     throw InputError(r.path(), e.what());
   }
-  if (a.local_count <= 0 || a.local_count > 65535 || a.pixel_count <= 0 || a.supersampling <= 0)
+  if (a.local_count <= 0 || a.pixel_count <= 0 || a.supersampling <= 0 ||
+      a.rows() >= std::numeric_limits<std::uint32_t>::max())
     throw InputError(r.path(), fmt::format("{}: invalid shape in the metadata", kName));
   if (!(a.error >= 0 && a.error <= 1 && a.bound >= 0 && a.bound <= a.error))
     throw InputError(r.path(),
                      fmt::format("{}: error {} / bound {} out of range", kName, a.error, a.bound));
-  const std::size_t slices = a.vertices * a.slices_per_vertex();
+  const std::size_t slices = a.slice_count_for_rows();
   a.bic_col_offsets = r.section<std::uint32_t>("bic_col_offsets");
-  a.bic_columns = read_columns(r, "bic_columns");
+  a.bic_columns = read_widened(r, "bic_columns");
   a.bic_constants = r.section<std::int16_t>("bic_constants", a.bic_columns.size());
   a.slice_offsets = r.section<std::uint32_t>("slice_offsets", slices + 1);
-  a.slice_rows = read_lanes(r, "slice_rows", slices * kSliceRows);
+  a.slice_rows = read_widened(r, "slice_rows", slices * kSliceRows);
   a.slice_base = r.section<std::uint32_t>("slice_base", slices);
   a.slice_codes = r.section<std::uint16_t>("slice_codes");
   auto invalid = [&](const std::string& what) {
@@ -537,30 +546,26 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   const auto n = static_cast<std::uint32_t>(a.pixel_count);
   if (std::any_of(a.bic_columns.begin(), a.bic_columns.end(), [&](auto k) { return k >= n; }))
     throw invalid(fmt::format("a column id is >= N = {}", n));
-  // Every row of a vertex in exactly one lane; a lane's ids below B (no id in an empty lane).
-  const std::size_t nb = a.bicluster_count();
-  const std::size_t m = static_cast<std::size_t>(a.local_count), spv = a.slices_per_vertex();
-  std::vector<std::uint8_t> seen(m);
-  for (std::size_t v = 0; v < a.vertices; ++v) {
-    std::fill(seen.begin(), seen.end(), 0);
-    for (std::size_t s = v * spv; s < (v + 1) * spv; ++s) {
-      for (int lane = 0; lane < kSliceRows; ++lane) {
-        const std::size_t j = a.slice_rows[s * kSliceRows + static_cast<std::size_t>(lane)];
-        if (j > m) throw invalid(fmt::format("lane row {} > M = {}", j, m));
-        if (j < m && seen[j]++) throw invalid(fmt::format("vertex {} lists row {} twice", v, j));
-        std::uint64_t id = a.slice_base[s];
-        for (std::uint32_t q = a.slice_offsets[s] + static_cast<std::uint32_t>(lane);
-             q < a.slice_offsets[s + 1]; q += kSliceRows) {
-          id += a.slice_codes[q];
-          const bool zero = id % kZeroStride == 0;
-          if ((zero && id >= a.product_count()) || (!zero && (id >= nb || j == m)))
-            throw invalid(fmt::format("slice {} lane {} reads product {} of {}", s, lane, id, nb));
-        }
+  // Every row in exactly one lane; a lane's ids below B (no id in an empty lane).
+  const std::size_t nb = a.bicluster_count(), rows = a.rows();
+  std::vector<std::uint8_t> seen(rows, 0);
+  for (std::size_t s = 0; s < slices; ++s) {
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      const std::uint32_t row = a.slice_rows[s * kSliceRows + static_cast<std::size_t>(lane)];
+      if (row > rows) throw invalid(fmt::format("lane row {} > rows = {}", row, rows));
+      if (row < rows && seen[row]++) throw invalid(fmt::format("row {} is listed twice", row));
+      std::uint64_t id = a.slice_base[s];
+      for (std::uint32_t q = a.slice_offsets[s] + static_cast<std::uint32_t>(lane);
+           q < a.slice_offsets[s + 1]; q += kSliceRows) {
+        id += a.slice_codes[q];
+        const bool zero = id % kZeroStride == 0;
+        if ((zero && id >= a.product_count()) || (!zero && (id >= nb || row == rows)))
+          throw invalid(fmt::format("slice {} lane {} reads product {} of {}", s, lane, id, nb));
       }
     }
-    if (std::count(seen.begin(), seen.end(), 1) != static_cast<std::ptrdiff_t>(m))
-      throw invalid(fmt::format("vertex {} does not list all its {} rows", v, m));
   }
+  if (std::count(seen.begin(), seen.end(), 1) != static_cast<std::ptrdiff_t>(rows))
+    throw invalid(fmt::format("the slices do not list all {} rows", rows));
   return std::make_unique<BiclusterTransfer>(std::move(a));
 }
 
@@ -606,7 +611,8 @@ CompressorEntry registry_entry() {
   };
   e.load = &BiclusterTransfer::load;
   // 2: grouped parallel search, merge of identical biclusters, lossy mode, state version 2.
-  e.version = 2;
+  // 3: phase 2's row order (rows sharing biclusters adjacent), state version 3.
+  e.version = 3;
   return e;
 }
 

@@ -66,11 +66,9 @@ class BiclusterDevice final : public DeviceRelighter {
       throw ParameterError(fmt::format("{}: {} rows / {} biclusters exceed the kernels' u32 ids",
                                        kName, rows_, biclusters_));
     const bool narrow = a.pixel_count <= 65536;
-    const bool narrow_rows = a.local_count <= 255;
     KernelDefines defines;
     defines.set("PRT_WG_SIZE", kWorkGroup)
         .set("PRT_COLUMN_T", narrow ? "ushort" : "uint")
-        .set("PRT_LANE_T", narrow_rows ? "uchar" : "ushort")
         .set("PRT_PHASE1_PER_ITEM", kPhase1PerItem);
     const cl::Program program = build_program(ctx, "bicluster", defines);
     phase1_ = make_kernel(program, "bicluster_phase1");
@@ -85,13 +83,7 @@ class BiclusterDevice final : public DeviceRelighter {
     columns_ = upload_columns(ctx, a.bic_columns, narrow, "bicluster columns");
     constants_ = upload_nonempty(ctx, a.bic_constants, "bicluster constants");
     slice_offsets_ = upload_nonempty(ctx, a.slice_offsets, "bicluster slice offsets");
-    if (narrow_rows) {
-      slice_rows_ =
-          upload_nonempty(ctx, std::vector<std::uint8_t>(a.slice_rows.begin(), a.slice_rows.end()),
-                          "bicluster slice rows");
-    } else {
-      slice_rows_ = upload_nonempty(ctx, a.slice_rows, "bicluster slice rows");
-    }
+    slice_rows_ = upload_nonempty(ctx, a.slice_rows, "bicluster slice rows");
     if (wide_ids_) {
       slice_codes_ = upload_nonempty(ctx, expand_ids(a), "bicluster slice ids");
     } else {
@@ -105,20 +97,20 @@ class BiclusterDevice final : public DeviceRelighter {
                        "bicluster local radiance");
     const std::uint64_t cb = narrow ? 2 : 4;
     bytes_ = a.bic_col_offsets.size() * 4 + a.bic_columns.size() * cb + a.bic_constants.size() * 2 +
-             a.slice_offsets.size() * 4 + a.slice_rows.size() * (narrow_rows ? 1 : 2) +
+             a.slice_offsets.size() * 4 + a.slice_rows.size() * 4 +
              (wide_ids_ ? a.slice_codes.size() * 4
                         : a.slice_base.size() * 4 + a.slice_codes.size() * 2) +
              cols_ * sizeof(cl_float4) + products * sizeof(cl_float4) + rows_ * sizeof(Rgb);
     set_args(phase1_, static_cast<cl_uint>(biclusters_), static_cast<cl_uint>(products - 1),
              col_offsets_, columns_, constants_, light_, products_);
     if (wide_ids_) {
-      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(a.slices_per_vertex()),
-               static_cast<cl_uint>(a.local_count), static_cast<float>(a.scale()), slice_offsets_,
-               slice_rows_, slice_codes_, products_, out_);
+      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(rows_),
+               static_cast<float>(a.scale()), slice_offsets_, slice_rows_, slice_codes_, products_,
+               out_);
     } else {
-      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(a.slices_per_vertex()),
-               static_cast<cl_uint>(a.local_count), static_cast<float>(a.scale()), slice_offsets_,
-               slice_rows_, slice_base_, slice_codes_, products_, out_);
+      set_args(phase2_, static_cast<cl_uint>(slices_), static_cast<cl_uint>(rows_),
+               static_cast<float>(a.scale()), slice_offsets_, slice_rows_, slice_base_,
+               slice_codes_, products_, out_);
     }
   }
 

@@ -1,10 +1,12 @@
-// Backend `bicluster`, stored layout (bicluster.h): SELL-4 slices with u16 id deltas and zero
-// slots. With more than 2^16 biclusters a lane must cross gaps through zero slots and pad on the
-// slot above its last id; the arrays must still stand for exactly the packed biclusters, relight
-// them (C++ and OpenCL), survive save/load, and the loader must refuse inconsistent arrays.
+// Backend `bicluster`, stored layout (bicluster.h): SELL-4 slices in phase 2's row order with
+// u16 id deltas and zero slots. With more than 2^16 biclusters a lane must cross gaps through zero
+// slots and pad on the slot above its last id; the arrays must still stand for exactly the packed
+// biclusters, relight them (C++ and OpenCL), survive save/load, and the loader must refuse
+// inconsistent arrays.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -27,9 +29,11 @@ struct Fixture {
   Biclustering b;
 };
 
-// Every entry of a random T as a 1x1 term (~80,000 of them, so ids pass 2^16), plus biclusters
-// joining a row of the first vertex to rows of the last ones: those get small ids (first use in
-// vertex 0) next to the last vertices' large ids, a gap of more than 2^16 in their lanes.
+// Every entry of a random T as a 1x1 term (~80,000 of them, so ids pass 2^16), biclusters of
+// three consecutive rows over all rows but the last, and one of two rows joining row 0 to the
+// last row. Phase 2's order places the triples' rows first (larger biclusters first), so the
+// pair's id is numbered with row 0, near the start, and the last row comes after every other
+// row: its lane goes from that small id to its terms' ids above 2^16.
 Fixture many_biclusters() {
   Fixture f;
   f.t = random_transfer(3, RandomTransferSpec{300, 4, 8, 2, 0.7, {}});
@@ -40,8 +44,9 @@ Fixture many_biclusters() {
     for (std::uint32_t i = c.offsets[j]; i < c.offsets[j + 1]; ++i)
       f.b.residual.push_back({static_cast<std::uint32_t>(j), c.columns[i], c.values[i]});
   const auto last = static_cast<std::uint32_t>(c.rows - 1);
-  for (std::uint32_t k = 0; k < 6; ++k)
-    f.b.biclusters.push_back(Bicluster{{k, last - 3 * k, last - 16 - k}, {k, k + 9}, {2, -1}});
+  for (std::uint32_t j = 0; j + 2 < last; j += 3)
+    f.b.biclusters.push_back(Bicluster{{j, j + 1, j + 2}, {j % 97}, {3}});
+  f.b.biclusters.push_back(Bicluster{{0, last}, {5, 14}, {2, -1}});
   return f;
 }
 
@@ -128,7 +133,8 @@ TEST(BiclusterLayout, SlicesHoldRowsSortedByLengthWithLittlePadding) {
           ->compress({t, nullptr, CubemapLayout(4), HemisphereGrid(4)}, Progress::null());
   const BiclusterArrays& a = dynamic_cast<const BiclusterTransfer&>(*ct).arrays();
   EXPECT_EQ(reconstruct(a), counts_of(t));
-  EXPECT_EQ(a.slice_count(), t.vertex_count() * 4);  // M = 16: four slices of four rows
+  EXPECT_EQ(a.slice_count(), t.vertex_count() * 4);  // M = 16: four slices of four rows per vertex
+  // Within a window of kRowWindow rows of phase 2's order, longer rows first.
   std::size_t previous_longest = 0;
   for (std::size_t s = 0; s < a.slice_count(); ++s) {
     std::size_t lengths[kSliceRows] = {};
@@ -136,13 +142,31 @@ TEST(BiclusterLayout, SlicesHoldRowsSortedByLengthWithLittlePadding) {
       a.for_each_id(s, lane, [&](std::uint32_t) { ++lengths[lane]; });
     for (int lane = 1; lane < kSliceRows; ++lane)
       EXPECT_GE(lengths[lane - 1], lengths[lane]) << "slice " << s << " lane " << lane;
-    if (s % 4 != 0) {
-      EXPECT_LE(lengths[0], previous_longest) << "slice " << s << " of its vertex";
+    if (s % (kRowWindow / kSliceRows) != 0) {
+      EXPECT_LE(lengths[0], previous_longest) << "slice " << s << " of its window";
     }
     previous_longest = lengths[kSliceRows - 1];
   }
   const double padding = 1.0 - static_cast<double>(a.incidences()) / a.slice_codes.size();
   EXPECT_LT(padding, 0.25) << "padding share of the slice codes";
+}
+
+// Phase 2's row order puts the rows of the largest bicluster first (they gather the same
+// product), up to the length sort within windows of kRowWindow rows.
+TEST(BiclusterLayout, RowOrderPlacesTheLargestBiclustersRowsTogether) {
+  Fixture f = many_biclusters();
+  const auto rows = static_cast<std::uint32_t>(f.b.rows);
+  // Spread over the whole matrix: in row order they would span all slices.
+  const Bicluster largest{{7, rows / 5, rows / 3, rows / 2, rows - 9, rows - 2}, {3}, {1}};
+  f.b.biclusters.push_back(largest);
+  const BiclusterArrays a = pack(f.b, f.t);
+  EXPECT_EQ(reconstruct(a), f.b.reconstruct());
+  ASSERT_GT(f.b.rows, 4 * kRowWindow);
+  std::vector<std::uint32_t> first;  // the rows of the first window
+  for (std::size_t q = 0; q < kRowWindow; ++q) first.push_back(a.slice_rows[q]);
+  for (std::uint32_t row : largest.rows)
+    EXPECT_NE(std::find(first.begin(), first.end(), row), first.end())
+        << "row " << row << " of the largest bicluster is not in the first window";
 }
 
 std::unique_ptr<CompressedTransfer> save_and_load(const BiclusterArrays& a) {
