@@ -85,16 +85,15 @@ std::vector<std::uint32_t> offsets_from(const std::vector<std::uint32_t>& sizes)
   return off;
 }
 
-// Phase 2's row order. Consecutive rows should gather the same products, so that P (16 bytes
-// per bicluster: 1.5 MB on the bunny, more than a core's L2 here) is read from L1/L2 rather
-// than from L3 or memory. A bicluster's rows are one local direction of many vertices, so the
-// rows of one vertex share almost nothing (1,075 distinct products in its 1,079 gathers on the
-// bunny): vertex by vertex, half of the gathers came from beyond the L2, and a process
+// Phase 2's row order. Consecutive rows should gather the same products, so that P (16 bytes per
+// bicluster: 1.5 MB on the bunny, more than a core's L2 here) is read from L1/L2 rather than from
+// L3 or memory. A bicluster's rows are one local direction of many vertices, so the rows of one
+// vertex share almost nothing (1,075 distinct products in its 1,079 gathers on the bunny): vertex
+// by vertex, half of the gathers reused a line last read more than 128 KiB earlier, and a process
 // streaming memory on the other core made the relight 2x slower. Here biclusters take, largest
-// first (ties: search order), their rows not yet placed; rows without a bicluster come last.
-// Then, within windows of kRowWindow rows, longer rows first, so that the four lanes of a slice
-// have similar lengths (less padding). docs/backends/bicluster.md, "Row order", has the
-// measurements.
+// first (ties: search order), their rows not yet placed; rows without a bicluster come last. Then,
+// within windows of kRowWindow rows, longer rows first, so that the four lanes of a slice have
+// similar lengths (less padding). docs/backends/bicluster.md, "Row order", has the measurements.
 std::vector<std::uint32_t> phase2_row_order(std::size_t rows,
                                             const std::vector<std::uint32_t>& sizes,
                                             const std::vector<std::uint32_t>& row_off,
@@ -514,8 +513,10 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   } catch (const ParameterError& e) {
     throw InputError(r.path(), e.what());
   }
+  // Rows index the u32 lanes (and rows() is the empty lane's sentinel): checked without
+  // overflowing the product.
   if (a.local_count <= 0 || a.pixel_count <= 0 || a.supersampling <= 0 ||
-      a.rows() >= std::numeric_limits<std::uint32_t>::max())
+      a.vertices >= std::numeric_limits<std::uint32_t>::max() / std::size_t(a.local_count))
     throw InputError(r.path(), fmt::format("{}: invalid shape in the metadata", kName));
   if (!(a.error >= 0 && a.error <= 1 && a.bound >= 0 && a.bound <= a.error))
     throw InputError(r.path(),

@@ -204,6 +204,14 @@ TEST(BiclusterLayout, SaveLoadKeepsTheArraysAndTheLoaderRefusesInconsistentOnes)
   twice.slice_rows[1] = twice.slice_rows[0];
   EXPECT_THROW(save_and_load(twice), InputError);
 
+  // vertices x M wraps around size_t to the true row count, so every section still matches:
+  // only the shape check can refuse it.
+  BiclusterArrays wrapped = a;
+  ASSERT_EQ(a.local_count, 16);
+  wrapped.vertices += std::size_t{1} << 60;
+  ASSERT_EQ(wrapped.rows(), a.rows());
+  EXPECT_THROW(save_and_load(wrapped), InputError);
+
   BiclusterArrays slot = a;  // zero slot 0 takes bicluster 1's columns
   slot.bic_col_offsets[1] = slot.bic_col_offsets[2];
   EXPECT_THROW(save_and_load(slot), InputError);
