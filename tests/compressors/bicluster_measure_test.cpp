@@ -8,8 +8,9 @@
 // computation and data percentages and the relative L2 and L1 errors of L* against the exact
 // double product over the evaluation lights (the `prtlab compress` evaluation).
 // GatherLocality prints how many distinct biclusters blocks of rows read under several
-// numberings; RelightTiming times the C++ and OpenCL relights beside the uncompressed one and
-// prints the worst per-value error (BICLUSTER_THREADS, BICLUSTER_REPS,
+// numberings; RowOrderReuse simulates how closely phase 2's row orders reuse P's lines (the
+// "Row order" table); RelightTiming times the C++ and OpenCL relights beside the uncompressed one
+// and prints the worst per-value error (BICLUSTER_THREADS, BICLUSTER_REPS,
 // BICLUSTER_UNIFORM_LIGHT=1 for uniform random radiance). BICLUSTER_GROUPS and BICLUSTER_SEED
 // override the defaults.
 #include <gtest/gtest.h>
@@ -244,6 +245,82 @@ double median_ms(std::vector<double> v) {
 }
 
 void relight_timing();
+
+// Reuse of P's lines in phase 2 under row orders (docs/backends/bicluster.md, "Row order"): an
+// LRU stack simulation of the gathers, in 64-byte lines of P (4 products), with biclusters
+// numbered by first use in each order as pack() numbers them. Prints the share of gathers whose
+// line was last read within 32 KiB (512 lines) and beyond 256 KiB (4,096 lines) of other lines.
+TEST(BiclusterMeasure, DISABLED_RowOrderReuse) {
+  const Loaded l = load_scene();
+  const TransferMatrix& t = l.st.result.transfer;
+  SearchOptions options;
+  options.groups = env_int("BICLUSTER_GROUPS", kDefaultGroups);
+  options.rows_per_vertex = static_cast<std::size_t>(t.local_count());
+  const BiclusterArrays a = pack(search(counts_of(t), options, Progress::null()), t);
+  const std::size_t rows = a.rows(), m = static_cast<std::size_t>(a.local_count);
+  std::vector<std::vector<std::uint32_t>> ids(rows);
+  for (std::size_t s = 0; s < a.slice_count(); ++s) {
+    for (int lane = 0; lane < kSliceRows; ++lane) {
+      const std::uint32_t row = a.slice_rows[s * kSliceRows + static_cast<std::size_t>(lane)];
+      a.for_each_id(s, lane, [&](std::uint32_t id) { ids[row].push_back(id); });
+    }
+  }
+  std::size_t gathers = 0;
+  for (const auto& r : ids) gathers += r.size();
+  auto simulate = [&](const char* name, const std::vector<std::uint32_t>& order) {
+    std::vector<std::int64_t> renumber(a.bicluster_count(), -1);
+    std::int64_t next = 0;
+    for (std::uint32_t row : order)
+      for (std::uint32_t id : ids[row])
+        if (renumber[id] < 0) renumber[id] = next++;
+    // Fenwick tree over access times: distinct lines since a line's last access.
+    std::vector<int> tree(gathers + 1, 0);
+    auto add = [&](std::size_t i, int v) {
+      for (++i; i < tree.size(); i += i & (~i + 1)) tree[i] += v;
+    };
+    auto prefix = [&](std::size_t i) {  // sum over times [0, i)
+      int sum = 0;
+      for (; i > 0; i -= i & (~i + 1)) sum += tree[i];
+      return sum;
+    };
+    std::vector<std::int64_t> last((static_cast<std::size_t>(next) + 3) / 4, -1);
+    std::size_t time = 0, near = 0, far = 0;
+    for (std::uint32_t row : order) {
+      for (std::uint32_t id : ids[row]) {
+        const auto line = static_cast<std::size_t>(renumber[id] / 4);
+        if (last[line] >= 0) {
+          const int distance = prefix(time) - prefix(static_cast<std::size_t>(last[line]) + 1);
+          near += distance < 512;
+          far += distance >= 4096;
+          add(static_cast<std::size_t>(last[line]), -1);
+        }
+        add(time, 1);
+        last[line] = static_cast<std::int64_t>(time++);
+      }
+    }
+    std::printf("%-44s within 32 KiB %5.1f %%, beyond 256 KiB %5.1f %%\n", name,
+                100.0 * static_cast<double>(near) / static_cast<double>(gathers),
+                100.0 * static_cast<double>(far) / static_cast<double>(gathers));
+  };
+  std::vector<std::uint32_t> stored(a.slice_rows.begin(), a.slice_rows.end());
+  std::erase_if(stored, [&](std::uint32_t row) { return row >= rows; });
+  std::vector<std::uint32_t> by_vertex(rows);  // version 2: per vertex, longer rows first
+  std::iota(by_vertex.begin(), by_vertex.end(), 0u);
+  for (std::size_t v = 0; v < a.vertices; ++v) {
+    std::stable_sort(
+        by_vertex.begin() + static_cast<std::ptrdiff_t>(v * m),
+        by_vertex.begin() + static_cast<std::ptrdiff_t>((v + 1) * m),
+        [&](std::uint32_t x, std::uint32_t y) { return ids[x].size() > ids[y].size(); });
+  }
+  std::vector<std::uint32_t> by_smallest = by_vertex;  // by the row's smallest stored id
+  std::stable_sort(by_smallest.begin(), by_smallest.end(), [&](std::uint32_t x, std::uint32_t y) {
+    const auto key = [&](std::uint32_t r) { return ids[r].empty() ? ~0u : ids[r].front(); };
+    return key(x) < key(y);
+  });
+  simulate("vertex by vertex (state version 2)", by_vertex);
+  simulate("rows by their smallest id", by_smallest);
+  simulate("stored: largest bicluster first (version 3)", stored);
+}
 
 // Relight time of the default compression under several bicluster numberings (the order of
 // the biclusters before pack), C++ and OpenCL, beside the uncompressed CSR product.
