@@ -16,12 +16,12 @@
 #include <cstdio>
 #include <random>
 
-#include "prtlab/data_paths.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/log.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/scene.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/base/log.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace {
 

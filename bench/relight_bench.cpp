@@ -49,17 +49,17 @@
 #include <thread>
 #include <vector>
 
-#include "prtlab/build_info.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/compression_stage.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/content_hash.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/scene.h"
-#include "prtlab/scene_transfer.h"
-#include "prtlab/stage_cache.h"
+#include "prtlab/base/build_info.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/content_hash.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/scene_transfer.h"
+#include "prtlab/storage/stage_cache.h"
 
 namespace {
 

@@ -36,15 +36,15 @@
 #include <string>
 #include <vector>
 
-#include "prtlab/build_info.h"
-#include "prtlab/cl_runtime.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/frame_renderer.h"
-#include "prtlab/scene.h"
-#include "prtlab/scene_transfer.h"
-#include "prtlab/stage_cache.h"
+#include "prtlab/base/build_info.h"
+#include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/scene_transfer.h"
+#include "prtlab/storage/stage_cache.h"
 
 namespace {
 

@@ -2,13 +2,13 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "prtlab/backend_evaluation.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/cl_device.h"
-#include "prtlab/compression_stage.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/scene_transfer.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/opencl/cl_device.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
 namespace {

@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/btf.h"
-#include "prtlab/btf_generator.h"
-#include "prtlab/btf_materials.h"
-#include "prtlab/error.h"
-#include "prtlab/hemisphere_grid.h"
-#include "prtlab/image_io.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/btf/btf_materials.h"
+#include "prtlab/base/error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/image/image_io.h"
 
 namespace prt::cli {
 namespace {

@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "prtlab/cl_context.h"
+#include "prtlab/opencl/cl_context.h"
 
 namespace prt::cli {
 

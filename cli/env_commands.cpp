@@ -11,10 +11,10 @@
 #include <string>
 
 #include "commands.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/image_io.h"
-#include "prtlab/log.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/base/log.h"
 
 namespace prt::cli {
 namespace {

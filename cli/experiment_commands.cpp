@@ -5,9 +5,9 @@
 
 #include "commands.h"
 #include "paper_table.h"
-#include "prtlab/build_info.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
+#include "prtlab/base/build_info.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
 #include "table_report.h"
 
 namespace prt::cli {

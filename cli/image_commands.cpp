@@ -11,15 +11,15 @@
 
 #include "commands.h"
 #include "provenance.h"
-#include "prtlab/atomic_file.h"
-#include "prtlab/biscale_reference.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/error.h"
-#include "prtlab/frame_renderer.h"
-#include "prtlab/image_error.h"
-#include "prtlab/image_io.h"
-#include "prtlab/scene.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/render/biscale_reference.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/base/error.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/render/image_error.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/geometry/scene.h"
 
 namespace prt::cli {
 namespace {

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "commands.h"
-#include "prtlab/build_info.h"
+#include "prtlab/base/build_info.h"
 
 namespace prt::cli {
 namespace {

@@ -4,11 +4,11 @@
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/build_info.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/log.h"
-#include "prtlab/progress.h"
+#include "prtlab/base/build_info.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/base/progress.h"
 
 int main(int argc, char** argv) {
   using namespace prt;

@@ -13,14 +13,14 @@
 #include "commands.h"
 #include "paper_numbers.h"
 #include "provenance.h"
-#include "prtlab/atomic_file.h"
-#include "prtlab/compression_stage.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/error.h"
-#include "prtlab/frame_renderer.h"
-#include "prtlab/scene_transfer.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/base/error.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
 namespace {

@@ -3,8 +3,8 @@
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/scene.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/geometry/scene.h"
 
 namespace prt::cli {
 namespace {

@@ -5,13 +5,13 @@
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/archive.h"
-#include "prtlab/backend_evaluation.h"
-#include "prtlab/compression_stage.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/scene_transfer.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
 namespace {

@@ -1,7 +1,7 @@
 # prtlab_embed_kernels(KERNEL_DIR <dir> OUTPUT <file.cpp>)
 #
 # Embeds every <dir>/*.cl into a generated C++ source (raw string literals, one per file, plus
-# a sorted name -> source table read by core/src/cl_kernel_sources.cpp). The glob is
+# a sorted name -> source table read by core/src/opencl/cl_kernel_sources.cpp). The glob is
 # CONFIGURE_DEPENDS, so adding or removing a .cl file re-runs CMake; the list of names is part
 # of the command line, so that change also regenerates the file; editing a .cl file re-runs
 # only this command (DEPENDS), then recompiles one .cpp.

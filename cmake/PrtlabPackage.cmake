@@ -36,7 +36,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/docs/adding-a-compressor.md
 install(EXPORT prtlabTargets NAMESPACE prtlab:: DESTINATION ${PRTLAB_INSTALL_CMAKEDIR})
 export(EXPORT prtlabTargets NAMESPACE prtlab:: FILE ${PROJECT_BINARY_DIR}/prtlabTargets.cmake)
 
-file(STRINGS ${PROJECT_SOURCE_DIR}/core/include/prtlab/compressor_registry.h PRTLAB_API_LINE
+file(STRINGS ${PROJECT_SOURCE_DIR}/core/include/prtlab/compress/compressor_registry.h PRTLAB_API_LINE
   REGEX "kPluginApiVersion = [0-9]+")
 string(REGEX REPLACE ".*kPluginApiVersion = ([0-9]+).*" "\\1" PRTLAB_PLUGIN_API_VERSION "${PRTLAB_API_LINE}")
 if(NOT PRTLAB_PLUGIN_API_VERSION MATCHES "^[0-9]+$")

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <random>
 
-#include "prtlab/cubemap.h"
-#include "prtlab/error.h"
-#include "prtlab/exact_relight.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/exact_relight.h"
 
 namespace prt::experiments {
 namespace {

@@ -23,8 +23,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "prtlab/compressor.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::experiments {
 

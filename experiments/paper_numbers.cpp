@@ -2,7 +2,7 @@
 
 #include <array>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt::experiments {
 namespace {

@@ -4,13 +4,13 @@
 
 #include <map>
 
-#include "prtlab/backend_evaluation.h"
-#include "prtlab/compression_stage.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/error.h"
-#include "prtlab/scene.h"
-#include "prtlab/scene_transfer.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::experiments {
 namespace {

@@ -23,8 +23,8 @@
 #include "lossless_check.h"
 #include "paper_numbers.h"
 #include "provenance.h"
-#include "prtlab/compressor.h"
-#include "prtlab/scene.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/geometry/scene.h"
 
 namespace prt {
 class ClContext;

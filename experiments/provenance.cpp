@@ -8,8 +8,8 @@
 #include <fstream>
 #include <thread>
 
-#include "prtlab/build_info.h"
-#include "prtlab/cl_context.h"
+#include "prtlab/base/build_info.h"
+#include "prtlab/opencl/cl_context.h"
 
 namespace prt::experiments {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <functional>
 
-#include "prtlab/atomic_file.h"
+#include "prtlab/storage/atomic_file.h"
 
 namespace prt::experiments {
 namespace {

@@ -1,4 +1,4 @@
-// BTF shading (eq. 3 of Sun et al.; core/include/prtlab/btf_shading.h, docs/rendering.md):
+// BTF shading (eq. 3 of Sun et al.; core/include/prtlab/render/btf_shading.h, docs/rendering.md):
 //
 //   B(x, e) = sum_j b(u, e, d_j) * L*_j(x),   L*(x) = b0 L*_p0 + b1 L*_p1 + b2 L*_p2
 //
@@ -42,7 +42,7 @@
 #define PRT_PI_F 3.14159265358979323846f
 #define PRT_QUARTER_PI_F (0.25f * PRT_PI_F)
 
-// ---- the float concentric map of core/src/btf.cpp --------------------------------------------
+// ---- the float concentric map of core/src/btf/btf.cpp --------------------------------------------
 // Ported line by line except for sin, cos and atan2, which are branch-free polynomials here:
 // PoCL calls its library's versions one work-item at a time, and they were 80 % of the
 // view-cache kernel's time (results/bench/shading-pocl.md).

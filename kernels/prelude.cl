@@ -1,4 +1,4 @@
-// Prepended to every program by prt::build_program (core/include/prtlab/cl_program.h), after the
+// Prepended to every program by prt::build_program (core/include/prtlab/opencl/cl_program.h), after the
 // caller's defines, so anything here can be overridden with a define. Keep it small: it is
 // compiled with every kernel file.
 

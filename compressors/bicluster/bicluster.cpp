@@ -9,10 +9,10 @@
 #include <numeric>
 
 #include "bicluster/bicluster_budget.h"
-#include "prtlab/archive.h"
-#include "prtlab/error.h"
-#include "prtlab/log.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
 namespace {

@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "bicluster/bicluster_search.h"
-#include "prtlab/compressor.h"
-#include "prtlab/compressor_registry.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/compress/compressor_registry.h"
 
 namespace prt {
 

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <numeric>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt::bicluster {
 

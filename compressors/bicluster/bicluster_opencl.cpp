@@ -4,8 +4,8 @@
 #include <limits>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/cl_runtime.h"
-#include "prtlab/error.h"
+#include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/base/error.h"
 
 namespace prt::bicluster {
 namespace {

@@ -12,8 +12,8 @@
 #include <random>
 #include <unordered_map>
 
-#include "prtlab/error.h"
-#include "prtlab/log.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
 
 namespace prt::bicluster {
 

@@ -18,7 +18,7 @@
 #include <span>
 #include <vector>
 
-#include "prtlab/progress.h"
+#include "prtlab/base/progress.h"
 
 namespace prt::bicluster {
 

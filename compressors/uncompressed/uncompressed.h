@@ -11,9 +11,9 @@
 #include <memory>
 #include <string>
 
-#include "prtlab/compressor.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
 

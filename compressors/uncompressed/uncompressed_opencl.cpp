@@ -2,8 +2,8 @@
 #include <bit>
 #include <limits>
 
-#include "prtlab/cl_runtime.h"
-#include "prtlab/error.h"
+#include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/base/error.h"
 #include "uncompressed/uncompressed.h"
 
 namespace prt::uncompressed {

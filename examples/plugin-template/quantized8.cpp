@@ -21,12 +21,12 @@
 //   |(T' L - T L)_i| <= sum_k |v'_ik - v_ik| L_k <= rho sum_k v_ik L_k = rho (T L)_i
 // per row and channel, hence ||T' L - T L||_2 <= rho ||T L||_2: rho is the relative L2 bound
 // declared (0 when nothing was rounded), computed exactly at compression time and saved.
-#include <prtlab/archive.h>
-#include <prtlab/cl_runtime.h>
-#include <prtlab/compressor.h>
-#include <prtlab/compressor_registry.h>
-#include <prtlab/error.h>
-#include <prtlab/transfer_matrix.h>
+#include <prtlab/storage/archive.h>
+#include <prtlab/opencl/cl_runtime.h>
+#include <prtlab/compress/compressor.h>
+#include <prtlab/compress/compressor_registry.h>
+#include <prtlab/base/error.h>
+#include <prtlab/transfer/transfer_matrix.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "prtlab/data_paths.h"
+#include "prtlab/storage/data_paths.h"
 #include "support/cli_runner.h"
 
 namespace prt {

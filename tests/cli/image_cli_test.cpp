@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "prtlab/environment_map.h"
-#include "prtlab/image_io.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/image/image_io.h"
 #include "support/cli_runner.h"
 
 namespace prt {

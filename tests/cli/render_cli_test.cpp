@@ -7,7 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "prtlab/image_io.h"
+#include "prtlab/image/image_io.h"
 #include "support/cli_runner.h"
 
 namespace prt {

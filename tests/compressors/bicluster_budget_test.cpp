@@ -13,10 +13,10 @@
 #include <random>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
 namespace {

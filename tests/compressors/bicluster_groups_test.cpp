@@ -9,8 +9,8 @@
 
 #include "bicluster/bicluster.h"
 #include "bicluster/bicluster_search.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
 namespace {

@@ -12,12 +12,12 @@
 #include <random>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/archive.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
 namespace {

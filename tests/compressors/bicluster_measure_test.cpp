@@ -25,14 +25,14 @@
 
 #include "bicluster/bicluster.h"
 #include "bicluster/bicluster_budget.h"
-#include "prtlab/backend_evaluation.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/cubemap.h"
-#include "prtlab/data_paths.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/scene.h"
-#include "prtlab/scene_transfer.h"
-#include "prtlab/stage_cache.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/scene_transfer.h"
+#include "prtlab/storage/stage_cache.h"
 
 namespace prt::bicluster {
 namespace {

@@ -11,10 +11,10 @@
 #include <set>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
 namespace {

@@ -9,11 +9,11 @@
 #include <cstring>
 #include <filesystem>
 
-#include "prtlab/archive.h"
-#include "prtlab/cl_device.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/exact_relight.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/opencl/cl_device.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/exact_relight.h"
 
 namespace prt::uncompressed {
 namespace {

@@ -24,12 +24,12 @@
 #include <utility>
 #include <vector>
 
-#include "prtlab/compressor.h"
-#include "prtlab/cubemap.h"
-#include "prtlab/hemisphere_grid.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::conformance {
 

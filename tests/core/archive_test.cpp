@@ -1,7 +1,7 @@
 // Content hashes (XXH3-128 against vectors from the xxhsum tool) and the prtlab archive: bit-exact
 // round trips, the documented byte layout, and a precise, file-naming refusal of every kind of
 // damaged or foreign file.
-#include "prtlab/archive.h"
+#include "prtlab/storage/archive.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "prtlab/content_hash.h"
-#include "prtlab/error.h"
+#include "prtlab/storage/content_hash.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

@@ -4,7 +4,7 @@
 // "Bi-scale render vs the reference: the discretisation error"): the test computes each term
 // for this scene without using either render, and checks that the measured error is within the
 // sum and shrinks when the discretisation is refined.
-#include "prtlab/biscale_reference.h"
+#include "prtlab/render/biscale_reference.h"
 
 #include <gtest/gtest.h>
 
@@ -16,15 +16,15 @@
 #include <tuple>
 #include <vector>
 
-#include "prtlab/btf.h"
-#include "prtlab/btf_shading.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/hemisphere_grid.h"
-#include "prtlab/image_error.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/progress.h"
-#include "prtlab/transfer_matrix.h"
-#include "prtlab/visibility.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/render/image_error.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/base/progress.h"
+#include "prtlab/transfer/transfer_matrix.h"
+#include "prtlab/transfer/visibility.h"
 
 namespace prt {
 namespace {

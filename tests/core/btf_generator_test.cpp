@@ -1,7 +1,7 @@
 // BTF generation: the flat Lambertian's closed form, shadows of a box bump against the closed
 // form, masking by bumps at grazing views, rays wrapping around the periodic tile, energy
 // conservation of every material, interreflection and determinism.
-#include "prtlab/btf_generator.h"
+#include "prtlab/btf/btf_generator.h"
 
 #include <gtest/gtest.h>
 
@@ -10,10 +10,10 @@
 #include <cstring>
 #include <numbers>
 
-#include "prtlab/btf.h"
-#include "prtlab/btf_materials.h"
-#include "prtlab/error.h"
-#include "prtlab/hemisphere_grid.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/btf/btf_materials.h"
+#include "prtlab/base/error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 
 namespace prt {
 namespace {

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "prtlab/btf.h"
-#include "prtlab/btf_generator.h"
-#include "prtlab/error.h"
-#include "prtlab/log.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
 #include "support/cli_runner.h"
 
 namespace prt {

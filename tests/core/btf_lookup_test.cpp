@@ -8,9 +8,9 @@
 #include <random>
 #include <vector>
 
-#include "prtlab/btf.h"
-#include "prtlab/error.h"
-#include "prtlab/hemisphere_grid.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/base/error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 
 namespace prt {
 namespace {

@@ -2,7 +2,7 @@
 // and without the view cache, a view-independent BTF, background on and off, light and view
 // changes), and the flat Lambertian plane under a constant environment, which must render
 // a * Le (docs/rendering.md "BTF shading" derives the tolerance).
-#include "prtlab/btf_shading.h"
+#include "prtlab/render/btf_shading.h"
 
 #include <gtest/gtest.h>
 
@@ -10,14 +10,14 @@
 #include <cmath>
 #include <random>
 
-#include "prtlab/btf_generator.h"
-#include "prtlab/btf_materials.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/environment_map.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/scene.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/btf/btf_materials.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
 namespace {

@@ -1,4 +1,4 @@
-#include "prtlab/camera.h"
+#include "prtlab/geometry/camera.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -8,9 +8,9 @@
 #include <fstream>
 #include <random>
 
-#include "prtlab/error.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/scene.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/geometry/scene.h"
 
 namespace prt {
 namespace {

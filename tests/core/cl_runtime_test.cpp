@@ -2,7 +2,7 @@
 // launches, timing and error messages. Tests that need a device skip (with a message) when
 // the machine has no OpenCL platform; the selection rules are tested on synthetic device
 // lists and run everywhere.
-#include "prtlab/cl_runtime.h"
+#include "prtlab/opencl/cl_runtime.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,7 +18,7 @@
 #include <sstream>
 #include <vector>
 
-#include "prtlab/log.h"
+#include "prtlab/base/log.h"
 
 namespace prt {
 namespace {

@@ -1,6 +1,6 @@
 // Cubemap layout: exact solid angles, the documented face order and orientation, pixel lookup
 // (including face edges and corners) and the light vector.
-#include "prtlab/cubemap.h"
+#include "prtlab/sphere/cubemap.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

@@ -1,6 +1,6 @@
 // Lat-long environment maps: the direction convention, exact texel solid angles, EXR loading
 // (invalid values, bad files) and the exact-overlap resampling onto the cubemap.
-#include "prtlab/environment_map.h"
+#include "prtlab/lighting/environment_map.h"
 
 #include <gtest/gtest.h>
 
@@ -16,10 +16,10 @@
 #include <tuple>
 #include <vector>
 
-#include "prtlab/data_paths.h"
-#include "prtlab/error.h"
-#include "prtlab/image_io.h"
-#include "prtlab/log.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/base/error.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/base/log.h"
 
 namespace prt {
 namespace {

@@ -1,6 +1,6 @@
 // Exact relight L* = T L: the float CSR product against a dense double product, one thread
 // against many, Eigen's sparse product against ours, both column-index widths.
-#include "prtlab/exact_relight.h"
+#include "prtlab/transfer/exact_relight.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <numeric>
 #include <random>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

@@ -2,17 +2,17 @@
 // the image of a fresh render with the same inputs; a light change relights and gives the
 // fresh render's image too; the OpenCL and C++ paths agree. Also the environment rotation and
 // camera orbit helpers of the fps command.
-#include "prtlab/frame_renderer.h"
+#include "prtlab/render/frame_renderer.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "prtlab/btf_materials.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/btf/btf_materials.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
 namespace {

@@ -1,4 +1,4 @@
-#include "prtlab/gbuffer.h"
+#include "prtlab/render/gbuffer.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -6,9 +6,9 @@
 #include <cmath>
 #include <filesystem>
 
-#include "prtlab/error.h"
-#include "prtlab/mesh_processing.h"
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/mesh_processing.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 namespace prt {
 namespace {

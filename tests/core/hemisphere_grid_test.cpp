@@ -1,7 +1,7 @@
 // Hemisphere grid: the concentric map and its inverse, the area-preserving lift to the
 // hemisphere, equal cell solid angles (measured independently of the map's formulas) and the
 // cell lookup.
-#include "prtlab/hemisphere_grid.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

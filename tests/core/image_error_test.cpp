@@ -1,5 +1,5 @@
 // Image error metrics (image_error.h) against hand-computed values, and the false-colour map.
-#include "prtlab/image_error.h"
+#include "prtlab/render/image_error.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <limits>
 #include <string>
 
-#include "prtlab/error.h"
-#include "prtlab/image_io.h"
+#include "prtlab/base/error.h"
+#include "prtlab/image/image_io.h"
 
 namespace prt {
 namespace {

@@ -1,6 +1,6 @@
 // Image output: bit-exact float EXR round trips, PNG size and tone mapping, and the cubemap
 // cross / strip layouts (adjacent faces must share their edges).
-#include "prtlab/image_io.h"
+#include "prtlab/image/image_io.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 #include <random>
 #include <string>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC

@@ -1,6 +1,6 @@
 // Local frames: orthonormal, right-handed (t x b = n), stable near the poles, and the
 // tangent-following variant.
-#include "prtlab/local_frame.h"
+#include "prtlab/sphere/local_frame.h"
 
 #include <gtest/gtest.h>
 

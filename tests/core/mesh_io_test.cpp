@@ -1,4 +1,4 @@
-#include "prtlab/mesh_io.h"
+#include "prtlab/geometry/mesh_io.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -14,9 +14,9 @@
 #include <tuple>
 #include <vector>
 
-#include "prtlab/error.h"
-#include "prtlab/log.h"
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 namespace prt {
 namespace {

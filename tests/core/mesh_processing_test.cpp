@@ -1,4 +1,4 @@
-#include "prtlab/mesh_processing.h"
+#include "prtlab/geometry/mesh_processing.h"
 
 #include <gtest/gtest.h>
 
@@ -12,11 +12,11 @@
 #include <string>
 #include <utility>
 
-#include "prtlab/data_paths.h"
-#include "prtlab/error.h"
-#include "prtlab/log.h"
-#include "prtlab/mesh_io.h"
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/geometry/mesh_io.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 namespace prt {
 namespace {

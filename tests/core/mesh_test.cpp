@@ -1,10 +1,10 @@
-#include "prtlab/mesh.h"
+#include "prtlab/geometry/mesh.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 namespace prt {
 namespace {

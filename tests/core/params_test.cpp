@@ -1,8 +1,8 @@
-#include "prtlab/params.h"
+#include "prtlab/compress/params.h"
 
 #include <gtest/gtest.h>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

@@ -1,4 +1,4 @@
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 #include <gtest/gtest.h>
 
@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "prtlab/error.h"
-#include "prtlab/mesh_processing.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/mesh_processing.h"
 
 namespace prt {
 namespace {

@@ -13,10 +13,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "prtlab/archive.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
 namespace {

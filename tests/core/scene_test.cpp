@@ -1,4 +1,4 @@
-#include "prtlab/scene.h"
+#include "prtlab/geometry/scene.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "prtlab/data_paths.h"
-#include "prtlab/error.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

@@ -1,7 +1,7 @@
 // SH transfer: applied to an SH light it must give the SH projection, in the vertex's local
 // frame, of the hemisphere-masked (and visibility-masked) light, computed here independently by
 // fine quadrature over the local hemisphere.
-#include "prtlab/sh_transfer.h"
+#include "prtlab/transfer/sh_transfer.h"
 
 #include <gtest/gtest.h>
 
@@ -9,12 +9,12 @@
 #include <cmath>
 #include <random>
 
-#include "prtlab/error.h"
-#include "prtlab/hemisphere_grid.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/spherical_harmonics.h"
-#include "prtlab/transfer_matrix.h"
-#include "prtlab/visibility.h"
+#include "prtlab/base/error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/sphere/spherical_harmonics.h"
+#include "prtlab/transfer/transfer_matrix.h"
+#include "prtlab/transfer/visibility.h"
 
 namespace prt {
 namespace {

@@ -1,7 +1,7 @@
 // Real spherical harmonics: closed forms for l <= 2, an independent evaluation through
 // std::assoc_legendre for every (l, m) up to order 10, the addition theorem, orthonormality
 // under cubemap quadrature, and projection / evaluation.
-#include "prtlab/spherical_harmonics.h"
+#include "prtlab/sphere/spherical_harmonics.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "prtlab/error.h"
+#include "prtlab/base/error.h"
 
 namespace prt {
 namespace {

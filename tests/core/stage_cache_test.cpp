@@ -1,6 +1,6 @@
 // The stage cache: a miss computes and stores, a hit loads without computing, an unusable
 // cached file is reported and recomputed (never used), refresh/off modes, unwritable caches.
-#include "prtlab/stage_cache.h"
+#include "prtlab/storage/stage_cache.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "prtlab/log.h"
+#include "prtlab/base/log.h"
 
 namespace prt {
 namespace {

@@ -1,4 +1,4 @@
-#include "prtlab/transfer_io.h"
+#include "prtlab/transfer/transfer_io.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -7,9 +7,9 @@
 #include <fstream>
 #include <iterator>
 
-#include "prtlab/error.h"
-#include "prtlab/random_transfer.h"
-#include "prtlab/scene_transfer.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt {
 namespace {

@@ -1,7 +1,7 @@
 // The exact pixel-basis transfer matrix: energy on an open plane within the derived horizon
 // bound, the structure of the blocks (one non-zero per column, values k / s^2), CSR
 // validation, determinism, and invariance under a rotation of the whole scene.
-#include "prtlab/transfer_matrix.h"
+#include "prtlab/transfer/transfer_matrix.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -11,11 +11,11 @@
 #include <random>
 #include <set>
 
-#include "prtlab/cubemap.h"
-#include "prtlab/error.h"
-#include "prtlab/hemisphere_grid.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/visibility.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/base/error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/transfer/visibility.h"
 
 namespace prt {
 namespace {

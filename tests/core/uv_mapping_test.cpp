@@ -1,4 +1,4 @@
-#include "prtlab/uv_mapping.h"
+#include "prtlab/geometry/uv_mapping.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "prtlab/error.h"
-#include "prtlab/mesh_io.h"
-#include "prtlab/mesh_processing.h"
-#include "prtlab/procedural_shapes.h"
-#include "prtlab/scene.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/mesh_io.h"
+#include "prtlab/geometry/mesh_processing.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/geometry/scene.h"
 
 namespace prt {
 namespace {

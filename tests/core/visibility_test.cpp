@@ -1,6 +1,6 @@
 // Visibility: the supersampled direction table, Embree occlusion, and the per-point visibility
 // cubemap against analytic answers (an open plane, a sphere's cone of shadow).
-#include "prtlab/visibility.h"
+#include "prtlab/transfer/visibility.h"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <cmath>
 #include <numeric>
 
-#include "prtlab/cubemap.h"
-#include "prtlab/error.h"
-#include "prtlab/procedural_shapes.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/base/error.h"
+#include "prtlab/geometry/procedural_shapes.h"
 
 namespace prt {
 namespace {

@@ -14,10 +14,10 @@
 
 #include "lossless_check.h"
 #include "paper_numbers.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/exact_relight.h"
-#include "prtlab/random_transfer.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/random_transfer.h"
 #include "table_report.h"
 
 namespace prt::experiments {

@@ -5,7 +5,7 @@
 // Neither may ever have its registration function called.
 #include <cstdlib>
 
-#include "prtlab/compressor_registry.h"
+#include "prtlab/compress/compressor_registry.h"
 
 #ifdef PRTLAB_BROKEN_PLUGIN_WRONG_API
 extern "C" int prtlab_plugin_api_version() {

@@ -18,10 +18,10 @@
 #include <string>
 
 #include "conformance/synthetic_cases.h"
-#include "prtlab/cl_context.h"
-#include "prtlab/compressor_registry.h"
-#include "prtlab/error.h"
-#include "prtlab/exact_relight.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/exact_relight.h"
 
 namespace prt {
 namespace {

@@ -1,0 +1,50 @@
+#pragma once
+// Measuring a compressed transfer against the exact product: the numbers every report prints.
+//
+// Error: relative L2 of L* (all rows, RGB) vs the exact CSR product accumulated in double, per
+// light; the summary is the mean and the maximum over the light set. Lights: the 8 Blender
+// world maps when the data cache has them, else procedural sun-and-sky variants.
+// Time: median over `repeats` relights, C++ (wall) and OpenCL (kernel time from events).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "prtlab/compress/compressor.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/transfer/transfer_matrix.h"
+
+namespace prt {
+
+struct EvaluationLight {
+  std::string name;
+  Cubemap radiance;
+};
+
+/// The evaluation light set at cubemap resolution R (names "courtyard", ... or "sunsky-N").
+/// `limit` > 0 keeps the first `limit` lights.
+std::vector<EvaluationLight> evaluation_lights(int resolution, int limit = 0);
+
+struct LightError {
+  std::string light;
+  double rel_l2 = 0;
+  double max_rel = 0;  ///< max-norm error relative to the largest exact value
+};
+
+struct BackendEvaluation {
+  std::vector<LightError> errors;
+  double mean_rel_l2 = 0;
+  double max_rel_l2 = 0;
+  double ms_cpp = 0;                    ///< median C++ relight (light projection excluded)
+  double ms_project = 0;                ///< median light projection
+  std::optional<double> ms_opencl;      ///< median kernel time; empty without a device
+  std::optional<double> opencl_vs_cpp;  ///< relative L2 of OpenCL vs C++ output
+  std::string device;                   ///< device label, or "none"
+};
+
+/// Evaluate `ct` on `lights` (error per light vs the exact product with `exact`), timing the
+/// first light's relight `repeats` times. `context` may be null (no OpenCL).
+BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
+                                   const std::vector<EvaluationLight>& lights, ClContext* context,
+                                   int repeats);
+
+}  // namespace prt

@@ -1,0 +1,116 @@
+#pragma once
+// The transfer-compressor interface. A backend implements two classes:
+//
+//   Compressor          built by name from validated parameters (see compressor_registry.h);
+//                       compress() turns the exact pixel-basis transfer into a CompressedTransfer.
+//   CompressedTransfer  the compressed representation: storage accounting, FLOP count, light
+//                       projection into its basis, relight (C++ reference and OpenCL), save.
+//
+// Every backend is measured against the exact CSR product L* = T L in the pixel basis.
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/transfer/local_radiance.h"
+#include "prtlab/compress/params.h"
+#include "prtlab/base/progress.h"
+
+namespace prt {
+
+class TransferMatrix;
+class ShTransfer;
+class ArchiveWriter;
+class ArchiveReader;
+class ClContext;
+
+/// What a compressor sees: the exact transfer and the bases it lives in.
+struct TransferInput {
+  const TransferMatrix& transfer;  ///< pixel basis, (vertices * M) x N, exact
+  const ShTransfer* sh = nullptr;  ///< SH transfer, when the scene computed one
+  const CubemapLayout& cubemap;    ///< global basis (N = 6 R^2)
+  const HemisphereGrid& grid;      ///< local basis (M = S^2)
+};
+
+/// Light in a backend's basis: `basis` names it ("pixel", "haar", "sh5", "srbf642", ...).
+struct LightCoeffs {
+  std::string basis;
+  std::vector<Rgb> values;
+};
+
+/// One stored component: name, bytes, and its byte layout in words ("u16 column id per term").
+struct StorageComponent {
+  std::string name;
+  std::uint64_t bytes = 0;
+  std::string layout;
+};
+struct StorageReport {
+  std::vector<StorageComponent> components;
+  std::uint64_t total_bytes() const;
+};
+
+/// A compressed transfer resident on an OpenCL device.
+class DeviceRelighter {
+ public:
+  virtual ~DeviceRelighter() = default;
+  /// Relight on the device and read the result back into `out` (resized as needed).
+  /// Returns the kernel time in milliseconds from OpenCL profiling events (all kernels of
+  /// one relight, excluding the light upload and the read-back).
+  virtual double relight(const LightCoeffs& light, LocalRadiance& out) = 0;
+  /// The same, without reading back (for timing loops); returns kernel milliseconds.
+  virtual double relight_on_device(const LightCoeffs& light) = 0;
+  /// Bytes of device memory held.
+  virtual std::uint64_t device_bytes() const = 0;
+};
+
+class CompressedTransfer {
+ public:
+  virtual ~CompressedTransfer() = default;
+
+  /// Registered backend name (what load_compressed() dispatches on).
+  virtual std::string backend() const = 0;
+  virtual StorageReport storage() const = 0;
+  /// FLOPs of one relight for one colour channel, counted as the papers count them
+  /// (a multiply-add is 2; a bicluster costs r + 2l - 1).
+  virtual double flops_per_relight() const = 0;
+  /// The norm declared_error_bound() is measured in, relative to the exact product T L over
+  /// all rows and colour channels: ||T~ L - T L|| / ||T L||.
+  enum class ErrorNorm { kRelativeL2, kRelativeL1 };
+  /// The relative error of relight() vs the exact product that the backend guarantees for any
+  /// non-negative light, in declared_error_norm(); 0 for lossless results (then only float
+  /// rounding remains).
+  virtual double declared_error_bound() const = 0;
+  virtual ErrorNorm declared_error_norm() const { return ErrorNorm::kRelativeL2; }
+  /// Basis of the LocalRadiance relight() produces.
+  virtual RadianceBasis output_basis() const { return RadianceBasis::kPixel; }
+
+  /// Project a radiance cubemap into this backend's light basis.
+  virtual LightCoeffs project_light(const Cubemap& radiance) const = 0;
+  /// C++ reference relight: out = T~ L (resized as needed).
+  virtual void relight(const LightCoeffs& light, LocalRadiance& out) const = 0;
+  /// OpenCL relight; a backend without a kernel returns nullptr (the conformance suite
+  /// reports that as a failure for registered backends). The relighter may keep a reference
+  /// to `context`, which must outlive it.
+  virtual std::unique_ptr<DeviceRelighter> upload(ClContext& context) const = 0;
+
+  /// Serialise the backend's state (the registry writes the header and backend name).
+  virtual void save(ArchiveWriter& archive) const = 0;
+};
+
+/// "relative_l2" / "relative_l1" (the JSON and report spelling).
+inline std::string_view to_string(CompressedTransfer::ErrorNorm n) {
+  return n == CompressedTransfer::ErrorNorm::kRelativeL1 ? "relative_l1" : "relative_l2";
+}
+
+class Compressor {
+ public:
+  virtual ~Compressor() = default;
+  virtual std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
+                                                       Progress& progress) const = 0;
+};
+
+}  // namespace prt

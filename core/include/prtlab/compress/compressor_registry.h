@@ -1,0 +1,83 @@
+#pragma once
+// Registry of compressor backends, filled by one line per backend:
+//
+//   PRT_REGISTER_COMPRESSOR(my_backend_entry);   // at the bottom of compressors/<name>/<name>.cpp
+//
+// where my_backend_entry() returns a CompressorEntry. Backends are compiled as CMake OBJECT
+// libraries so their static registrars survive static linking; tests count the registry.
+// Plugins: a shared library exporting
+//
+//   extern "C" int prtlab_plugin_api_version();            // must return kPluginApiVersion
+//   extern "C" void prtlab_register_plugin(prt::CompressorRegistry&);
+//
+// is loaded by load_plugin(path) (the CLI's --plugin path.so).
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "prtlab/compress/compressor.h"
+#include "prtlab/compress/params.h"
+
+namespace prt {
+
+/// Bumped whenever compressor.h / compressor_registry.h change in a way that breaks binaries.
+inline constexpr int kPluginApiVersion = 2;
+
+struct CompressorEntry {
+  std::string name;
+  std::string description;        ///< one line: the method and its paper
+  std::vector<ParamSpec> params;  ///< backend-specific; shared ones are added by ParamSet
+  bool lossless =
+      false;  ///< at default parameters, relight equals the exact product up to float rounding
+  std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
+  std::function<std::unique_ptr<CompressedTransfer>(const ArchiveReader&)> load;
+  std::string origin = "built-in";  ///< "built-in" or the plugin's path
+  /// Bump whenever the backend's compressed output for the same input and parameters changes
+  /// (algorithm or file layout): it is part of the stage-cache key of compressed results.
+  std::uint32_t version = 1;
+};
+
+class CompressorRegistry {
+ public:
+  static CompressorRegistry& instance();
+
+  /// Throws when the name is taken or the entry is incomplete.
+  void add(CompressorEntry entry);
+  bool contains(const std::string& name) const { return entries_.contains(name); }
+  const CompressorEntry& get(const std::string& name) const;  ///< throws, listing known names
+  std::vector<std::string> names() const;
+
+  /// Validate parameters and construct.
+  std::unique_ptr<Compressor> create(const std::string& name,
+                                     const std::map<std::string, std::string>& params) const;
+
+ private:
+  std::map<std::string, CompressorEntry> entries_;
+};
+
+/// Static registrar used by PRT_REGISTER_COMPRESSOR.
+struct CompressorRegistrar {
+  explicit CompressorRegistrar(CompressorEntry (*make)()) {
+    CompressorRegistry::instance().add(make());
+  }
+};
+
+/// Load a plugin shared library; refuses a missing file, missing symbols or an API mismatch
+/// with a clear message. Returns the names it registered.
+std::vector<std::string> load_plugin(const std::filesystem::path& library);
+
+/// Save a compressed transfer with a header naming its backend; load dispatches on it.
+void save_compressed(const CompressedTransfer& ct, const std::filesystem::path& file);
+std::unique_ptr<CompressedTransfer> load_compressed(const std::filesystem::path& file);
+
+}  // namespace prt
+
+#define PRT_CONCAT_INNER(a, b) a##b
+#define PRT_CONCAT(a, b) PRT_CONCAT_INNER(a, b)
+#define PRT_REGISTER_COMPRESSOR(make_entry)                                      \
+  static const ::prt::CompressorRegistrar PRT_CONCAT(prt_registrar_, __LINE__) { \
+    &make_entry                                                                  \
+  }

@@ -1,0 +1,119 @@
+#pragma once
+// The frame loop of bi-scale PRT (DESIGN.md "Data flow"; docs/rendering.md "Frame loop"):
+//
+//   view change  (set_camera)       trace the G-buffer (Embree), upload it; L* is reused
+//   light change (set_environment)  project the light into the backend's basis, relight,
+//                                   upload L* (and the environment as the background)
+//   render()                        shade the current G-buffer with the current L*
+//
+// A FrameRenderer holds the scene's mesh, its materials, one compressed transfer (any backend,
+// through the core interface only), the backend's DeviceRelighter and a DeviceBtfShader when
+// an OpenCL context is given, else the C++ relight and shade_frame_reference, and a
+// GBufferTracer. render() returns the wall-clock milliseconds of every stage run since the
+// previous render() and the running counters, so callers (prtlab fps, tests) can see that a
+// view-only change did not relight.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/geometry/camera.h"
+#include "prtlab/compress/compressor.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/render/gbuffer.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/storage/stage_cache.h"
+
+namespace prt {
+
+class ClContext;
+
+/// Wall-clock milliseconds of the stages of one frame (those not run are 0).
+struct FrameStageTimes {
+  double gbuffer_ms = 0;         ///< view change: Embree primary rays
+  double gbuffer_upload_ms = 0;  ///< view change: G-buffer compaction + upload (device path)
+  double project_ms = 0;         ///< light change: CompressedTransfer::project_light
+  double relight_ms = 0;  ///< light change: relight (device: light upload, kernels, L* read-back)
+  double upload_ms = 0;   ///< light change: L* and background upload to the shader (device path)
+  double shade_ms = 0;    ///< shading pass, waited for (device: kernels; C++: the reference)
+  /// Device time of the shading kernels (OpenCL profiling; 0 on the C++ path), and the part of
+  /// it spent building the view cache (0 unless the G-buffer changed).
+  double shade_kernel_ms = 0;
+  double view_cache_kernel_ms = 0;
+  double relight_kernel_ms = 0;  ///< device time of the relight kernels (0 on the C++ path)
+
+  /// Sum of the wall-clock stages: the frame time.
+  double total_ms() const {
+    return gbuffer_ms + gbuffer_upload_ms + project_ms + relight_ms + upload_ms + shade_ms;
+  }
+};
+
+/// Running totals since construction.
+struct FrameCounters {
+  std::uint64_t frames = 0;          ///< render() calls
+  std::uint64_t gbuffer_traces = 0;  ///< set_camera() calls
+  std::uint64_t relights = 0;        ///< set_environment() calls (each relights once)
+};
+
+struct FrameStats {
+  FrameStageTimes times;  ///< of the stages run since the previous render()
+  FrameCounters counters;
+};
+
+class FrameRenderer {
+ public:
+  /// `context` null: C++ relight and shading. Throws ParameterError when the transfer's output
+  /// is not in the pixel basis, its vertex count differs from the mesh's, or a material does
+  /// not match (validate_materials).
+  FrameRenderer(Mesh mesh, ShadingMaterials materials,
+                std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
+                const ShadingOptions& options = {});
+  ~FrameRenderer();
+  FrameRenderer(FrameRenderer&&) noexcept;
+  FrameRenderer& operator=(FrameRenderer&&) noexcept;
+
+  /// View change: trace and upload the G-buffer. L* is kept.
+  void set_camera(const Camera& camera);
+  /// Light change: project, relight, upload L* and the background. `background`, when given,
+  /// is what misses show (e.g. a finer cubemap of the same environment); without it misses
+  /// show the lighting cubemap itself.
+  void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
+  /// Shade (needs a camera and an environment: ParameterError otherwise).
+  FrameStats render();
+  /// The last rendered image (read back from the device on the OpenCL path).
+  RgbImage image() const;
+
+  bool uses_opencl() const;
+  const FrameCounters& counters() const;
+  const Mesh& mesh() const;
+  const GBuffer& gbuffer() const;         ///< of the current camera
+  const LocalRadiance& radiance() const;  ///< L* of the current environment
+  /// The device shader (nullptr on the C++ path): byte counts, hit pixels.
+  const DeviceBtfShader* device_shader() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// ---- helpers of the render and fps commands ------------------------------------------------
+
+/// The BTF of every part of a scene: generate_btf_cached(part.btf, params with light_side =
+/// desc.local_grid) once per distinct material. `cache_hits` (optional) counts the materials
+/// that came from the stage cache.
+ShadingMaterials load_scene_materials(const SceneDesc& desc, BtfParams params, StageCache& cache,
+                                      bool show_progress = false, int* cache_hits = nullptr);
+
+/// The environment rotated by `degrees` about +y (right-handed: +x turns towards -z):
+/// L'(d) = L(R^-1 d). A lat-long image rotates about +y by a shift of its columns; fractional
+/// shifts interpolate linearly between the two nearest columns (power is kept exactly, since
+/// every row's texels have the same solid angle).
+LatLongImage rotate_latlong_y(const LatLongImage& image, double degrees);
+
+/// `camera` with its eye turned by `degrees` about the vertical (+y) axis through its target
+/// (an orbit; up, field of view and size kept).
+Camera orbit_camera(const Camera& camera, double degrees);
+
+}  // namespace prt

@@ -1,0 +1,40 @@
+#pragma once
+// Per-vertex local incident radiance L*_p = T_p L, in the basis the backend produces.
+#include <cstddef>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "prtlab/base/types.h"
+
+namespace prt {
+
+enum class RadianceBasis {
+  kPixel,               ///< M values per vertex: the local hemisphere grid cells d_j
+  kSphericalHarmonics,  ///< n = order^2 SH coefficients per vertex, in the local frame
+};
+std::string_view to_string(RadianceBasis b);
+
+struct LocalRadiance {
+  RadianceBasis basis = RadianceBasis::kPixel;
+  int dim = 0;  ///< values per vertex (M, or n SH coefficients)
+  std::size_t vertices = 0;
+  std::vector<Rgb> values;  ///< vertices * dim, index = vertex * dim + j
+
+  LocalRadiance() = default;
+  LocalRadiance(RadianceBasis b, int d, std::size_t v)
+      : basis(b), dim(d), vertices(v), values(static_cast<std::size_t>(d) * v, Rgb(0.f)) {}
+  std::size_t rows() const { return values.size(); }
+  std::span<const Rgb> vertex(std::size_t v) const {
+    return std::span<const Rgb>(values).subspan(v * static_cast<std::size_t>(dim),
+                                                static_cast<std::size_t>(dim));
+  }
+};
+
+/// Relative L2 error ||a - b|| / ||b|| over all values and channels (b is the reference).
+/// Throws when the shapes differ.
+double relative_l2_error(const LocalRadiance& a, const LocalRadiance& reference);
+/// Largest |a - b| over values and channels, divided by the largest |b| (max-norm error).
+double max_relative_error(const LocalRadiance& a, const LocalRadiance& reference);
+
+}  // namespace prt

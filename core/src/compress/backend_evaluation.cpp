@@ -1,0 +1,115 @@
+#include "prtlab/compress/backend_evaluation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/base/error.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/base/log.h"
+
+namespace prt {
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+LocalRadiance exact_double(const TransferMatrix& t, const Cubemap& radiance) {
+  const auto d = relight_exact_double(t, radiance.light_vector());
+  LocalRadiance out(RadianceBasis::kPixel, t.local_count(), t.vertex_count());
+  for (std::size_t i = 0; i < d.size(); ++i) out.values[i] = Rgb(d[i]);
+  return out;
+}
+
+}  // namespace
+
+std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
+  static const char* kWorlds[] = {"courtyard", "city",   "forest",  "interior",
+                                  "night",     "studio", "sunrise", "sunset"};
+  std::vector<EvaluationLight> out;
+  const auto dir = data_dir() / "envmaps";
+  bool have_all = true;
+  for (const char* w : kWorlds)
+    have_all = have_all && std::filesystem::exists(dir / (std::string(w) + ".exr"));
+  const int count = limit > 0 ? std::min(limit, 8) : 8;
+  if (have_all) {
+    const LogLevel saved = log_level();
+    set_log_level(LogLevel::kError);  // the Blender maps carry a few tiny negative texels each
+    for (int i = 0; i < count; ++i)
+      out.push_back({kWorlds[i],
+                     resample_to_cubemap(load_latlong_exr(dir / (std::string(kWorlds[i]) + ".exr")),
+                                         resolution)});
+    set_log_level(saved);
+    return out;
+  }
+  log_warn(
+      "data cache has no Blender world maps; evaluating with procedural sun-and-sky lights "
+      "(run scripts/setup.sh --data for the real ones)");
+  for (int i = 0; i < count; ++i) {
+    SunSky s;
+    const double a = 0.7 + 0.8 * i;
+    s.sun_dir = glm::normalize(Vec3d(std::cos(a), 0.3 + 0.08 * i, std::sin(a)));
+    out.push_back({fmt::format("sunsky-{}", i), s.to_cubemap(resolution)});
+  }
+  return out;
+}
+
+BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
+                                   const std::vector<EvaluationLight>& lights, ClContext* context,
+                                   int repeats) {
+  BackendEvaluation ev;
+  PRT_CHECK(!lights.empty(), "no evaluation lights");
+  if (ct.output_basis() != RadianceBasis::kPixel)
+    throw Error(fmt::format(
+        "backend '{}' produces {} radiance; evaluation against the pixel-basis product needs a "
+        "conversion to the local cells (not available yet)",
+        ct.backend(), to_string(ct.output_basis())));
+  LocalRadiance out;
+  for (const auto& light : lights) {
+    const LightCoeffs coeffs = ct.project_light(light.radiance);
+    ct.relight(coeffs, out);
+    const LocalRadiance ref = exact_double(exact, light.radiance);
+    ev.errors.push_back({light.name, relative_l2_error(out, ref), max_relative_error(out, ref)});
+  }
+  for (const auto& e : ev.errors) {
+    ev.mean_rel_l2 += e.rel_l2 / static_cast<double>(ev.errors.size());
+    ev.max_rel_l2 = std::max(ev.max_rel_l2, e.rel_l2);
+  }
+
+  using clock = std::chrono::steady_clock;
+  const LightCoeffs coeffs = ct.project_light(lights.front().radiance);
+  std::vector<double> ms, ms_proj;
+  for (int i = 0; i < std::max(1, repeats); ++i) {
+    auto t0 = clock::now();
+    const LightCoeffs c = ct.project_light(lights.front().radiance);
+    ms_proj.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
+    t0 = clock::now();
+    ct.relight(coeffs, out);
+    ms.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
+  }
+  ev.ms_cpp = median(ms);
+  ev.ms_project = median(ms_proj);
+
+  ev.device = "none";
+  if (context) {
+    ev.device = context->info().label();
+    auto dev = ct.upload(*context);
+    if (dev) {
+      LocalRadiance gpu;
+      dev->relight(coeffs, gpu);
+      ev.opencl_vs_cpp = relative_l2_error(gpu, out);
+      std::vector<double> kms;
+      for (int i = 0; i < std::max(1, repeats); ++i) kms.push_back(dev->relight_on_device(coeffs));
+      ev.ms_opencl = median(kms);
+    }
+  }
+  return ev;
+}
+
+}  // namespace prt

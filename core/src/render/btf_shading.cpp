@@ -1,0 +1,382 @@
+#include "prtlab/render/btf_shading.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/base/error.h"
+
+namespace prt {
+
+static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb must be three packed floats");
+
+namespace {
+
+constexpr std::size_t kWorkGroup = 64;
+
+std::size_t part_count(const Mesh& mesh) {
+  std::size_t parts = 1;
+  for (const auto p : mesh.triangle_part) parts = std::max<std::size_t>(parts, p + 1u);
+  return parts;
+}
+
+void validate_radiance(const LocalRadiance& radiance, const Mesh& mesh) {
+  if (radiance.basis != RadianceBasis::kPixel)
+    throw ParameterError(
+        fmt::format("BTF shading needs pixel-basis local radiance (M values per "
+                    "vertex), got basis '{}'",
+                    to_string(radiance.basis)));
+  if (radiance.vertices != mesh.positions.size() ||
+      radiance.values.size() != radiance.vertices * static_cast<std::size_t>(radiance.dim))
+    throw ParameterError(
+        fmt::format("BTF shading: local radiance has {} vertices x {} values, the "
+                    "mesh has {} vertices",
+                    radiance.vertices, radiance.dim, mesh.positions.size()));
+}
+
+// The background pixel a miss shows, or `black` (a pixel index past the cubemap) without one.
+int background_pixel(const float* direction, const CubemapLayout* layout, int black) {
+  const Vec3d d(direction[0], direction[1], direction[2]);
+  if (!layout || !(d.x != 0.0 || d.y != 0.0 || d.z != 0.0) || !std::isfinite(d.x + d.y + d.z))
+    return black;
+  return layout->pixel_of(d);
+}
+
+double event_ms(ClContext& ctx, cl::Event& event, const std::string& name) {
+  return event_milliseconds(event, ctx.info().device_name, "timing of kernel " + name);
+}
+
+}  // namespace
+
+void validate_materials(const ShadingMaterials& materials, const Mesh& mesh, int dim) {
+  const std::size_t parts = part_count(mesh);
+  if (materials.part_btf.size() < parts)
+    throw ParameterError(fmt::format("BTF shading: the mesh has {} parts but {} BTFs were given",
+                                     parts, materials.part_btf.size()));
+  for (std::size_t p = 0; p < materials.part_btf.size(); ++p) {
+    const auto& btf = materials.part_btf[p];
+    if (!btf) throw ParameterError(fmt::format("BTF shading: part {} has no BTF", p));
+    if (btf->light_count() != dim)
+      throw ParameterError(
+          fmt::format("BTF shading: part {}'s BTF '{}' has M = {} light "
+                      "directions, the local radiance has {} (generate it with "
+                      "light_side = the scene's local_grid)",
+                      p, btf->material(), btf->light_count(), dim));
+  }
+}
+
+RgbImage shade_frame_reference(const GBuffer& g, const Mesh& mesh,
+                               const ShadingMaterials& materials, const LocalRadiance& radiance,
+                               const Cubemap* background, const ShadingOptions& options) {
+  validate_radiance(radiance, mesh);
+  validate_materials(materials, mesh, radiance.dim);
+  const Cubemap* bg = options.background ? background : nullptr;
+  const int m = radiance.dim;
+  RgbImage image(g.width, g.height);
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.height), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<Rgb> lstar(static_cast<std::size_t>(m));
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < g.width; ++x) {
+        const std::size_t i = g.index(x, y);
+        const std::int32_t tri = g.triangle[i];
+        if (tri < 0) {
+          const int k = background_pixel(&g.direction[4 * i], bg ? &bg->layout : nullptr, -1);
+          image.at(x, y) = k < 0 ? Rgb(0.0f) : bg->radiance[k];
+          continue;
+        }
+        const std::uint32_t* v = &mesh.indices[3 * static_cast<std::size_t>(tri)];
+        const float w1 = g.bary[2 * i], w2 = g.bary[2 * i + 1], w0 = 1.0f - w1 - w2;
+        const auto l0 = radiance.vertex(v[0]), l1 = radiance.vertex(v[1]),
+                   l2 = radiance.vertex(v[2]);
+        for (int j = 0; j < m; ++j) lstar[j] = w0 * l0[j] + w1 * l1[j] + w2 * l2[j];
+        const Btf& btf = *materials.part_btf[static_cast<std::size_t>(g.part[i])];
+        const Vec2 uv(g.uv[2 * i], g.uv[2 * i + 1]);
+        const Vec3 e(g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2]);
+        image.at(x, y) = btf.shade(uv, e, lstar, options.filter);
+      }
+    }
+  });
+  return image;
+}
+
+// ---- DeviceBtfShader -------------------------------------------------------------------------
+
+struct DeviceBtfShader::Impl {
+  ClContext& ctx;
+  ShadingOptions options;
+  int m = 0;
+  std::size_t vertices = 0;
+  std::size_t parts = 0;
+  std::vector<int> part_texel_reads;  // view vectors read per hit pixel of each part
+  cl::Kernel single, view_cache, cached;
+  cl::Buffer indices, btf, part_offset, part_info;
+  cl::Buffer code, slot_ids, slot_geom, slot_view, radiance, cache, background, image;
+  std::size_t pixel_capacity = 0, slot_capacity = 0, cache_capacity = 0;
+  std::uint64_t static_bytes = 0;
+
+  int width = 0, height = 0;
+  std::size_t pixels = 0, slots = 0;
+  std::uint64_t view_vectors_per_frame = 0;  // sum over hit pixels of part_texel_reads
+  std::vector<std::int32_t> codes;
+  std::vector<std::uint32_t> miss_pixels;
+  std::vector<Vec3> miss_directions;
+  std::optional<CubemapLayout> background_layout;  // of the uploaded background, if any
+  int background_pixels = 0;                       // its N (0: none; index N is black)
+  bool have_gbuffer = false, have_radiance = false, cache_valid = false;
+  double last_cache_ms = 0.0;
+
+  Impl(ClContext& c, const ShadingOptions& o) : ctx(c), options(o) {}
+
+  void compute_miss_codes() {
+    const int black = background_pixels;
+    tbb::parallel_for(std::size_t{0}, miss_pixels.size(), [&](std::size_t k) {
+      const Vec3& d = miss_directions[k];
+      const float dir[3] = {d.x, d.y, d.z};
+      const int pixel =
+          background_pixel(dir, background_layout ? &*background_layout : nullptr, black);
+      codes[miss_pixels[k]] = -(1 + pixel);
+    });
+  }
+};
+
+DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
+                                 const ShadingMaterials& materials, const Cubemap* background,
+                                 const ShadingOptions& options)
+    : impl_(std::make_unique<Impl>(context, options)) {
+  Impl& s = *impl_;
+  if (materials.part_btf.empty() || !materials.part_btf.front())
+    throw ParameterError("BTF shading: no materials given");
+  s.m = materials.part_btf.front()->light_count();
+  validate_materials(materials, mesh, s.m);
+  s.vertices = mesh.positions.size();
+  s.parts = materials.part_btf.size();
+
+  KernelDefines defines;
+  defines.set("PRT_WG_SIZE", kWorkGroup)
+      .set("PRT_M", s.m)
+      .set("PRT_BILINEAR", options.filter == TexelFilter::kBilinear ? 1 : 0);
+  const cl::Program program = build_program(context, "btf_shading", defines);
+  s.single = make_kernel(program, "btf_shade_single");
+  s.view_cache = make_kernel(program, "btf_view_cache");
+  s.cached = make_kernel(program, "btf_shade_cached");
+
+  s.indices = upload(context, std::span<const std::uint32_t>(mesh.indices), "shading triangles");
+  // Distinct BTFs once each, in part order, into one buffer.
+  std::map<const Btf*, std::uint64_t> offset_of;
+  std::vector<const Btf*> order;
+  std::uint64_t total = 0;
+  for (const auto& b : materials.part_btf) {
+    if (offset_of.emplace(b.get(), total).second) {
+      order.push_back(b.get());
+      total += b->value_count();
+    }
+  }
+  s.btf = make_buffer(context, total * sizeof(float), CL_MEM_READ_ONLY, "BTFs");
+  for (const Btf* b : order)
+    write_buffer(context, s.btf, b->data().data(), b->bytes(), "BTFs",
+                 offset_of.at(b) * sizeof(float));
+  std::vector<cl_ulong> offsets;
+  std::vector<cl_int4> info;
+  const int texels = options.filter == TexelFilter::kBilinear ? 4 : 1;
+  for (const auto& b : materials.part_btf) {
+    offsets.push_back(offset_of.at(b.get()));
+    info.push_back(cl_int4{{b->resolution(), b->view_side(), b->view_independent() ? 1 : 0, 0}});
+    s.part_texel_reads.push_back(texels * (b->view_independent() ? 1 : 4));
+  }
+  s.part_offset = upload(context, std::span<const cl_ulong>(offsets), "BTF part offsets");
+  s.part_info = upload(context, std::span<const cl_int4>(info), "BTF part table");
+  s.static_bytes = mesh.indices.size() * 4 + total * sizeof(float) + offsets.size() * 8 +
+                   info.size() * sizeof(cl_int4);
+  s.radiance = make_buffer(context, s.vertices * s.m * sizeof(Rgb), CL_MEM_READ_ONLY,
+                           "shading local radiance");
+  set_background(background);
+}
+
+DeviceBtfShader::~DeviceBtfShader() = default;
+DeviceBtfShader::DeviceBtfShader(DeviceBtfShader&&) noexcept = default;
+DeviceBtfShader& DeviceBtfShader::operator=(DeviceBtfShader&&) noexcept = default;
+
+void DeviceBtfShader::set_background(const Cubemap* background) {
+  Impl& s = *impl_;
+  const Cubemap* bg = s.options.background ? background : nullptr;
+  const int n = bg ? bg->layout.pixel_count() : 0;
+  // One black pixel past the cubemap: what misses show without a background.
+  std::vector<Rgb> data(static_cast<std::size_t>(n) + 1, Rgb(0.0f));
+  if (bg) std::copy(bg->radiance.begin(), bg->radiance.end(), data.begin());
+  const bool layout_changed = n != s.background_pixels || !s.background();
+  if (layout_changed)
+    s.background = upload(s.ctx, std::span<const Rgb>(data), "shading background");
+  else
+    write_buffer(s.ctx, s.background, data.data(), data.size() * sizeof(Rgb), "shading background");
+  if (!layout_changed) return;
+  s.background_pixels = n;
+  if (bg)
+    s.background_layout.emplace(bg->layout);
+  else
+    s.background_layout.reset();
+  if (s.have_gbuffer) {
+    s.compute_miss_codes();
+    write_buffer(s.ctx, s.code, s.codes.data(), s.pixels * sizeof(std::int32_t),
+                 "shading pixel codes");
+  }
+}
+
+void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
+  Impl& s = *impl_;
+  PRT_CHECK(g.triangle.size() == g.pixel_count(), "G-buffer arrays do not match {} x {}", g.width,
+            g.height);
+  if (g.pixel_count() == 0) throw ParameterError("BTF shading: the G-buffer has no pixels");
+  s.width = g.width;
+  s.height = g.height;
+  s.pixels = g.pixel_count();
+  s.codes.resize(s.pixels);
+  s.miss_pixels.clear();
+  s.miss_directions.clear();
+  std::vector<cl_int2> ids;
+  std::vector<cl_float4> geom, view;
+  const std::size_t expected = std::min(s.pixels, s.slots + s.slots / 4 + 64);
+  ids.reserve(expected);
+  geom.reserve(expected);
+  view.reserve(expected);
+  s.miss_pixels.reserve(s.pixels - std::min(s.pixels, s.slots));
+  s.miss_directions.reserve(s.pixels - std::min(s.pixels, s.slots));
+  s.view_vectors_per_frame = 0;
+  for (std::size_t i = 0; i < s.pixels; ++i) {
+    const std::int32_t tri = g.triangle[i];
+    if (tri < 0) {
+      s.miss_pixels.push_back(static_cast<std::uint32_t>(i));
+      s.miss_directions.emplace_back(g.direction[4 * i], g.direction[4 * i + 1],
+                                     g.direction[4 * i + 2]);
+      continue;
+    }
+    const std::int32_t part = g.part[i];
+    PRT_CHECK(part >= 0 && static_cast<std::size_t>(part) < s.parts,
+              "G-buffer pixel {} has part {}, {} BTFs given", i, part, s.parts);
+    s.codes[i] = static_cast<std::int32_t>(ids.size());
+    ids.push_back(cl_int2{{tri, part}});
+    geom.push_back(cl_float4{{g.bary[2 * i], g.bary[2 * i + 1], g.uv[2 * i], g.uv[2 * i + 1]}});
+    view.push_back(
+        cl_float4{{g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2], 0.0f}});
+    s.view_vectors_per_frame += static_cast<std::uint64_t>(s.part_texel_reads[part]);
+  }
+  s.slots = ids.size();
+  s.compute_miss_codes();
+
+  if (s.pixels > s.pixel_capacity) {
+    s.code = make_buffer(s.ctx, s.pixels * sizeof(std::int32_t), CL_MEM_READ_ONLY,
+                         "shading pixel codes");
+    s.image = make_buffer(s.ctx, s.pixels * sizeof(Rgb), CL_MEM_WRITE_ONLY, "shaded image");
+    s.pixel_capacity = s.pixels;
+  }
+  // Slot and cache buffers grow with 50 % headroom: the hit count changes with every view,
+  // and a fresh buffer costs an allocation plus page faults on its first use.
+  const std::size_t grown = s.slots + s.slots / 2 + 1;
+  if (s.slots > s.slot_capacity || s.slot_capacity == 0) {
+    const std::size_t n = grown;
+    s.slot_ids = make_buffer(s.ctx, n * sizeof(cl_int2), CL_MEM_READ_ONLY, "shading slots");
+    s.slot_geom = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
+    s.slot_view = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
+    s.slot_capacity = n;
+  }
+  write_buffer(s.ctx, s.code, s.codes.data(), s.pixels * sizeof(std::int32_t),
+               "shading pixel codes");
+  if (s.slots > 0) {
+    write_buffer(s.ctx, s.slot_ids, ids.data(), s.slots * sizeof(cl_int2), "shading slots");
+    write_buffer(s.ctx, s.slot_geom, geom.data(), s.slots * sizeof(cl_float4), "shading slots");
+    write_buffer(s.ctx, s.slot_view, view.data(), s.slots * sizeof(cl_float4), "shading slots");
+  }
+  if (s.options.cache_view_vectors && s.slots > s.cache_capacity) {
+    s.cache = cl::Buffer();  // release the old one before allocating the larger one
+    s.cache = make_buffer(s.ctx, grown * s.m * sizeof(Rgb), CL_MEM_READ_WRITE,
+                          "view-interpolated BTF cache");
+    s.cache_capacity = grown;
+  }
+  s.have_gbuffer = true;
+  s.cache_valid = false;
+}
+
+void DeviceBtfShader::set_radiance(const LocalRadiance& radiance) {
+  Impl& s = *impl_;
+  if (radiance.basis != RadianceBasis::kPixel || radiance.dim != s.m ||
+      radiance.vertices != s.vertices || radiance.values.size() != s.vertices * s.m)
+    throw ParameterError(fmt::format(
+        "BTF shading: need pixel-basis local radiance of {} vertices x M = {}, got basis '{}' "
+        "with {} vertices x {}",
+        s.vertices, s.m, to_string(radiance.basis), radiance.vertices, radiance.dim));
+  write_buffer(s.ctx, s.radiance, radiance.values.data(), radiance.values.size() * sizeof(Rgb),
+               "shading local radiance");
+  s.have_radiance = true;
+}
+
+double DeviceBtfShader::shade() {
+  Impl& s = *impl_;
+  if (!s.have_gbuffer || !s.have_radiance)
+    throw ParameterError("BTF shading: set_gbuffer and set_radiance must precede shade()");
+  s.last_cache_ms = 0.0;
+  if (s.pixels == 0) return 0.0;  // OpenCL forbids an empty launch
+  const auto pixels = static_cast<cl_uint>(s.pixels);
+  if (!s.options.cache_view_vectors) {
+    set_args(s.single, pixels, s.code, s.slot_ids, s.slot_geom, s.slot_view, s.indices, s.radiance,
+             s.btf, s.part_offset, s.part_info, s.background, s.image);
+    cl::Event ev =
+        launch(s.ctx, "btf_shade_single", s.single, LaunchRange::linear(s.pixels, kWorkGroup));
+    return event_ms(s.ctx, ev, "btf_shade_single");
+  }
+  if (!s.cache_valid && s.slots > 0) {
+    set_args(s.view_cache, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom, s.slot_view,
+             s.btf, s.part_offset, s.part_info, s.cache);
+    cl::Event ev =
+        launch(s.ctx, "btf_view_cache", s.view_cache, LaunchRange::linear(s.slots, kWorkGroup));
+    s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache");
+  }
+  s.cache_valid = true;
+  set_args(s.cached, pixels, s.code, s.slot_ids, s.slot_geom, s.indices, s.radiance,
+           s.slots > 0 ? s.cache : s.slot_geom, s.background, s.image);
+  cl::Event ev =
+      launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.pixels, kWorkGroup));
+  return s.last_cache_ms + event_ms(s.ctx, ev, "btf_shade_cached");
+}
+
+double DeviceBtfShader::last_view_cache_ms() const {
+  return impl_->last_cache_ms;
+}
+
+RgbImage DeviceBtfShader::read_image() const {
+  Impl& s = *impl_;
+  RgbImage image(s.width, s.height);
+  download(s.ctx, s.image, std::span<Rgb>(image.pixels), "shaded image");
+  return image;
+}
+
+DeviceBtfShader::PassBytes DeviceBtfShader::bytes_per_pass() const {
+  const Impl& s = *impl_;
+  const std::uint64_t vector = static_cast<std::uint64_t>(s.m) * sizeof(Rgb);
+  const std::uint64_t lstar = 3 * vector * s.slots;
+  PassBytes b;
+  b.single_pass = s.view_vectors_per_frame * vector + lstar;
+  b.view_cache = s.view_vectors_per_frame * vector + s.slots * vector;
+  b.cached_shade = s.slots * vector + lstar;
+  return b;
+}
+
+std::uint64_t DeviceBtfShader::bytes_read_per_frame() const {
+  return bytes_per_pass().single_pass;
+}
+
+std::size_t DeviceBtfShader::hit_pixels() const {
+  return impl_->slots;
+}
+
+std::uint64_t DeviceBtfShader::device_bytes() const {
+  const Impl& s = *impl_;
+  return s.static_bytes + s.vertices * s.m * sizeof(Rgb) + s.pixel_capacity * (4 + sizeof(Rgb)) +
+         s.slot_capacity * (sizeof(cl_int2) + 2 * sizeof(cl_float4)) +
+         s.cache_capacity * s.m * sizeof(Rgb) + (s.background_pixels + 1) * sizeof(Rgb);
+}
+
+}  // namespace prt

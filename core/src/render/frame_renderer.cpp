@@ -1,0 +1,218 @@
+#include "prtlab/render/frame_renderer.h"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/base/error.h"
+
+namespace prt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+struct FrameRenderer::Impl {
+  Mesh mesh;
+  ShadingMaterials materials;
+  std::shared_ptr<const CompressedTransfer> transfer;
+  ClContext* context = nullptr;
+  ShadingOptions options;
+  GBufferTracer tracer;
+  std::unique_ptr<DeviceRelighter> relighter;
+  std::optional<DeviceBtfShader> shader;
+
+  GBuffer gbuffer;
+  LocalRadiance radiance;
+  std::optional<Cubemap> environment;
+  std::optional<Cubemap> background;  // what misses show; the lighting cubemap by default
+  bool have_camera = false;
+  RgbImage image;  // C++ path
+  bool rendered = false;
+  FrameStageTimes pending;
+  FrameCounters counters;
+
+  Impl(Mesh m, ShadingMaterials mat, std::shared_ptr<const CompressedTransfer> t, ClContext* c,
+       const ShadingOptions& o)
+      : mesh(std::move(m)),
+        materials(std::move(mat)),
+        transfer(std::move(t)),
+        context(c),
+        options(o),
+        tracer(mesh) {}
+};
+
+FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
+                             std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
+                             const ShadingOptions& options) {
+  if (!transfer) throw ParameterError("frame renderer: no compressed transfer given");
+  if (transfer->output_basis() != RadianceBasis::kPixel)
+    throw ParameterError(
+        fmt::format("frame renderer: backend '{}' relights into the {} basis; BTF "
+                    "shading needs the pixel basis",
+                    transfer->backend(), to_string(transfer->output_basis())));
+  if (materials.part_btf.empty() || !materials.part_btf.front())
+    throw ParameterError("frame renderer: no materials given");
+  validate_materials(materials, mesh, materials.part_btf.front()->light_count());
+  impl_ = std::make_unique<Impl>(std::move(mesh), std::move(materials), std::move(transfer),
+                                 context, options);
+  Impl& s = *impl_;
+  if (context) {
+    s.relighter = s.transfer->upload(*context);
+    if (!s.relighter)
+      throw ParameterError(
+          fmt::format("frame renderer: backend '{}' has no OpenCL relight (run "
+                      "with --no-opencl for the C++ path)",
+                      s.transfer->backend()));
+    s.shader.emplace(*context, s.mesh, s.materials, nullptr, options);
+  }
+}
+
+FrameRenderer::~FrameRenderer() = default;
+FrameRenderer::FrameRenderer(FrameRenderer&&) noexcept = default;
+FrameRenderer& FrameRenderer::operator=(FrameRenderer&&) noexcept = default;
+
+void FrameRenderer::set_camera(const Camera& camera) {
+  Impl& s = *impl_;
+  auto t0 = Clock::now();
+  s.gbuffer = s.tracer.trace(camera);
+  s.pending.gbuffer_ms += ms_since(t0);
+  if (s.shader) {
+    t0 = Clock::now();
+    s.shader->set_gbuffer(s.gbuffer);
+    s.pending.gbuffer_upload_ms += ms_since(t0);
+  }
+  s.have_camera = true;
+  ++s.counters.gbuffer_traces;
+}
+
+void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* background) {
+  Impl& s = *impl_;
+  auto t0 = Clock::now();
+  const LightCoeffs light = s.transfer->project_light(environment);
+  s.pending.project_ms += ms_since(t0);
+  t0 = Clock::now();
+  if (s.relighter)
+    s.pending.relight_kernel_ms += s.relighter->relight(light, s.radiance);
+  else
+    s.transfer->relight(light, s.radiance);
+  s.pending.relight_ms += ms_since(t0);
+  if (s.radiance.basis != RadianceBasis::kPixel || s.radiance.vertices != s.mesh.positions.size())
+    throw ParameterError(
+        fmt::format("frame renderer: backend '{}' produced {} values for {} "
+                    "vertices; the mesh has {}",
+                    s.transfer->backend(), s.radiance.values.size(), s.radiance.vertices,
+                    s.mesh.positions.size()));
+  s.environment.emplace(environment);
+  s.background.emplace(background ? *background : environment);
+  if (s.shader) {
+    t0 = Clock::now();
+    s.shader->set_radiance(s.radiance);
+    s.shader->set_background(&*s.background);
+    s.pending.upload_ms += ms_since(t0);
+  }
+  ++s.counters.relights;
+}
+
+FrameStats FrameRenderer::render() {
+  Impl& s = *impl_;
+  if (!s.have_camera || !s.environment)
+    throw ParameterError("frame renderer: set_camera and set_environment must precede render()");
+  const auto t0 = Clock::now();
+  if (s.shader) {
+    s.pending.shade_kernel_ms = s.shader->shade();
+    s.pending.view_cache_kernel_ms = s.shader->last_view_cache_ms();
+  } else {
+    s.image = shade_frame_reference(s.gbuffer, s.mesh, s.materials, s.radiance, &*s.background,
+                                    s.options);
+  }
+  s.pending.shade_ms = ms_since(t0);
+  s.rendered = true;
+  ++s.counters.frames;
+  FrameStats stats{s.pending, s.counters};
+  s.pending = {};
+  return stats;
+}
+
+RgbImage FrameRenderer::image() const {
+  const Impl& s = *impl_;
+  if (!s.rendered) throw ParameterError("frame renderer: nothing rendered yet");
+  return s.shader ? s.shader->read_image() : s.image;
+}
+
+bool FrameRenderer::uses_opencl() const {
+  return impl_->shader.has_value();
+}
+const FrameCounters& FrameRenderer::counters() const {
+  return impl_->counters;
+}
+const Mesh& FrameRenderer::mesh() const {
+  return impl_->mesh;
+}
+const GBuffer& FrameRenderer::gbuffer() const {
+  return impl_->gbuffer;
+}
+const LocalRadiance& FrameRenderer::radiance() const {
+  return impl_->radiance;
+}
+const DeviceBtfShader* FrameRenderer::device_shader() const {
+  return impl_->shader ? &*impl_->shader : nullptr;
+}
+
+// ---- helpers -------------------------------------------------------------------------------
+
+ShadingMaterials load_scene_materials(const SceneDesc& desc, BtfParams params, StageCache& cache,
+                                      bool show_progress, int* cache_hits) {
+  params.light_side = desc.local_grid;
+  std::map<std::string, std::shared_ptr<const Btf>> by_name;
+  ShadingMaterials materials;
+  if (cache_hits) *cache_hits = 0;
+  for (const ScenePart& part : desc.parts) {
+    auto it = by_name.find(part.btf);
+    if (it == by_name.end()) {
+      BtfStageResult r =
+          generate_btf_cached(part.btf, params, cache, CacheMode::kUse, show_progress);
+      if (cache_hits && r.cache_hit) ++*cache_hits;
+      it = by_name.emplace(part.btf, std::make_shared<const Btf>(std::move(r.btf))).first;
+    }
+    materials.part_btf.push_back(it->second);
+  }
+  return materials;
+}
+
+LatLongImage rotate_latlong_y(const LatLongImage& image, double degrees) {
+  LatLongImage out = image;
+  const int w = image.width;
+  if (w <= 0) return out;
+  // Rotating by alpha maps phi to phi - alpha, so the new column c samples the old image at
+  // c + alpha W / 2 pi.
+  double shift = degrees / 360.0 * w;
+  shift -= std::floor(shift / w) * w;  // [0, W)
+  const int whole = static_cast<int>(std::floor(shift));
+  const float frac = static_cast<float>(shift - whole);
+  for (int row = 0; row < image.height; ++row) {
+    for (int c = 0; c < w; ++c) {
+      const int c0 = (c + whole) % w, c1 = (c + whole + 1) % w;
+      out.texels[static_cast<std::size_t>(row) * w + c] =
+          (1.0f - frac) * image.at(c0, row) + frac * image.at(c1, row);
+    }
+  }
+  return out;
+}
+
+Camera orbit_camera(const Camera& camera, double degrees) {
+  const double a = degrees * kPi / 180.0;
+  const double c = std::cos(a), s = std::sin(a);
+  const Vec3d r = camera.eye - camera.target;
+  Camera out = camera;
+  out.eye = camera.target + Vec3d(r.x * c + r.z * s, r.y, -r.x * s + r.z * c);
+  return out;
+}
+
+}  // namespace prt

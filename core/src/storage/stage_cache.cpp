@@ -1,0 +1,116 @@
+#include "prtlab/storage/stage_cache.h"
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "prtlab/storage/data_paths.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+
+namespace prt {
+namespace {
+
+constexpr std::size_t kMaxStageChars = 64;
+constexpr const char* kMetaKey = "stage_cache";
+
+void validate_stage(std::string_view stage) {
+  const bool ok_chars = std::all_of(stage.begin(), stage.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+  });
+  if (stage.empty() || stage.size() > kMaxStageChars || stage.front() == '.' || !ok_chars)
+    throw ParameterError(
+        fmt::format("stage name '{}' is not valid for the cache (1 to {} "
+                    "characters of a-z 0-9 . _ -, not starting with '.')",
+                    stage, kMaxStageChars));
+}
+
+// One mutex per cache file, process-wide (whatever StageCache object asks): a second thread
+// asking for an entry being computed waits and then hits, instead of computing it again and
+// racing on the shared temporary file name "<file>.tmp.<pid>".
+std::shared_ptr<std::mutex> entry_lock(const std::filesystem::path& file) {
+  static std::mutex registry_mutex;
+  static std::map<std::string, std::weak_ptr<std::mutex>> registry;
+  const std::lock_guard guard(registry_mutex);
+  if (registry.size() > 4096)
+    std::erase_if(registry, [](const auto& e) { return e.second.expired(); });
+  std::weak_ptr<std::mutex>& slot = registry[file.string()];
+  std::shared_ptr<std::mutex> lock = slot.lock();
+  if (!lock) {
+    lock = std::make_shared<std::mutex>();
+    slot = lock;
+  }
+  return lock;
+}
+
+}  // namespace
+
+StageCache::StageCache() : StageCache(cache_dir()) {}
+StageCache::StageCache(std::filesystem::path root) : root_(std::move(root)) {}
+
+std::filesystem::path StageCache::path_for(std::string_view stage, const Hash128& key) const {
+  validate_stage(stage);
+  return root_ / std::string(stage) / (key.hex() + ".prt");
+}
+
+bool StageCache::contains(std::string_view stage, const Hash128& key) const {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(path_for(stage, key), ec);
+}
+
+StageCache::Stats StageCache::stats() const {
+  return Stats{hits_.load(), misses_.load(), corrupt_.load(), write_failures_.load()};
+}
+
+void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute& compute,
+                       const Consume& consume, CacheMode mode) {
+  const std::filesystem::path file = path_for(stage, key);
+  const std::shared_ptr<std::mutex> lock = entry_lock(file);
+  const std::lock_guard guard(*lock);
+  if (mode == CacheMode::kUse && contains(stage, key)) {
+    try {
+      const ArchiveReader reader = ArchiveReader::open(file);
+      // The file name is the key; the metadata repeats it, which catches files copied or
+      // renamed into the wrong place.
+      const auto it = reader.meta().find(kMetaKey);
+      if (it == reader.meta().end() || !it->is_object() || it->value("key", "") != key.hex() ||
+          it->value("stage", "") != stage)
+        throw InputError(file, "its stage/key metadata does not match its name");
+      consume(reader);
+      ++hits_;
+      log_debug("stage '{}': cache hit {}", stage, file.string());
+      return;
+    } catch (const InputError& e) {
+      ++corrupt_;
+      log_warn("stage '{}': ignoring unusable cache entry ({}); recomputing", stage, e.what());
+    }
+  }
+
+  ++misses_;
+  log_debug("stage '{}': computing ({})", stage,
+            mode == CacheMode::kOff ? "cache off" : file.string());
+  ArchiveWriter writer = compute();
+  writer.add_meta(kMetaKey, {{"stage", stage}, {"key", key.hex()}});
+  bool stored = false;
+  if (mode != CacheMode::kOff) {
+    try {
+      writer.write(file);
+      stored = true;
+    } catch (const Error& e) {
+      ++write_failures_;
+      log_warn("stage '{}': cannot store the result in the cache ({}); continuing without it",
+               stage, e.what());
+    }
+  }
+  // Reading back what was stored (rather than keeping the computed value) is what makes a miss
+  // return exactly what later hits will; an error here is a bug in the stage, so it propagates.
+  if (stored) {
+    consume(ArchiveReader::open(file));
+    return;
+  }
+  const std::vector<std::byte> bytes = writer.to_bytes();
+  consume(ArchiveReader::from_bytes(bytes, file));
+}
+
+}  // namespace prt
