@@ -28,7 +28,7 @@
 //   (one command line). Random interleaving spreads every benchmark's repetitions over the whole
 //   run: the VMs here have slow periods of a few seconds that hit the bicluster relight (C++
 //   and OpenCL) 1.5-1.8x and not the uncompressed one, and in registration order they fell on
-//   whichever benchmarks ran then (docs/backends/bicluster.md, "Noise").
+//   whichever benchmarks ran then (compressors/bicluster/README.md, "Noise").
 //
 // The bunny's transfer comes from the stage cache ($PRTLAB_CACHE), computed on the first run;
 // without the bunny's data, a synthetic matrix of its shape (210,304 x 6,144, ~8.7 M non-zeros)

@@ -177,7 +177,7 @@ std::vector<std::string> table_notes(const TableResult& result) {
     notes.push_back(fmt::format(
         "{}: computation {:.1f} % vs the paper's {:.1f} %, data {:.2f} % vs {:.2f} %. FLOPs are "
         "counted as the paper counts them (a bicluster costs r + 2l - 1, a residual term 2; "
-        "docs/backends/bicluster.md); storage is our layout{}, the paper does not give its "
+        "compressors/bicluster/README.md); storage is our layout{}, the paper does not give its "
         "layout. Both percentages are relative to our own T, which has {} entries than the "
         "paper's.",
         r.scene, r.computation_percent, p.computation_percent, r.data_percent, p.data_percent,

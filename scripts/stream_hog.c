@@ -1,5 +1,5 @@
 /* A process that streams through N MiB of memory forever, reading and writing every cache line:
- * the disturbance used in docs/backends/bicluster.md ("Row order") to test how the relights
+ * the disturbance used in compressors/bicluster/README.md ("Row order") to test how the relights
  * stand a neighbour that evicts the shared L3 and takes memory bandwidth.
  *
  *   gcc -O2 -o /tmp/stream_hog scripts/stream_hog.c

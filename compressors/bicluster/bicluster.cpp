@@ -93,7 +93,7 @@ std::vector<std::uint32_t> offsets_from(const std::vector<std::uint32_t>& sizes)
 // streaming memory on the other core made the relight 2x slower. Here biclusters take, largest
 // first (ties: search order), their rows not yet placed; rows without a bicluster come last. Then,
 // within windows of kRowWindow rows, longer rows first, so that the four lanes of a slice have
-// similar lengths (less padding). docs/backends/bicluster.md, "Row order", has the measurements.
+// similar lengths (less padding). compressors/bicluster/README.md, "Row order", has the measurements.
 std::vector<std::uint32_t> phase2_row_order(std::size_t rows,
                                             const std::vector<std::uint32_t>& sizes,
                                             const std::vector<std::uint32_t>& row_off,

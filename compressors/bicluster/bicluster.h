@@ -11,7 +11,7 @@
 // step and stored as u16 id deltas. A slice is one loop of fixed length with 4 independent
 // gathers per step: rows of varying length (0 to ~50 biclusters, ~17 on average) would
 // otherwise cost a mispredicted loop exit per row, which measured as much as the gathers
-// themselves. docs/backends/bicluster.md gives the byte layout and the measurements.
+// themselves. compressors/bicluster/README.md gives the byte layout and the measurements.
 //
 // Parameters: "groups" (row groups searched in parallel, bicluster_search.h), "error" (the lossy
 // mode's relative L1 budget, bicluster_budget.h; 0 = lossless), "opencl_ids" (the device's id
@@ -34,7 +34,7 @@ namespace bicluster {
 inline constexpr std::string_view kName = "bicluster";
 /// Version of this backend's archive sections and metadata (bumped when they change).
 inline constexpr int kStateVersion = 3;
-/// Default of the "groups" parameter (docs/backends/bicluster.md has the measurements).
+/// Default of the "groups" parameter (compressors/bicluster/README.md has the measurements).
 inline constexpr int kDefaultGroups = 2;
 /// Rows per slice of phase 2.
 inline constexpr int kSliceRows = 4;
@@ -48,13 +48,13 @@ inline constexpr std::uint32_t kZeroStride = 0x8000;
 
 /// Phase 2's id stream on the device (parameter "opencl_ids"): the stored u16 deltas decoded
 /// in the kernel, or expanded at upload to u32 ids (twice the bytes, no decoding); auto picks
-/// by device type (docs/backends/bicluster.md has the measurements).
+/// by device type (compressors/bicluster/README.md has the measurements).
 enum class DeviceIds { kAuto, kU16, kU32 };
 std::string_view to_string(DeviceIds ids);
 /// Throws ParameterError for an unknown name.
 DeviceIds parse_device_ids(std::string_view text);
 
-/// The stored form (the arrays of docs/backends/bicluster.md).
+/// The stored form (the arrays of compressors/bicluster/README.md).
 struct BiclusterArrays {
   std::size_t vertices = 0;
   int local_count = 0;  ///< M

@@ -1,4 +1,4 @@
-// The OpenCL relight of backend `bicluster` (kernels/bicluster.cl): two launches per relight,
+// The OpenCL relight of backend `bicluster` (compressors/bicluster/bicluster.cl): two launches per relight,
 // phase 1 a work-item per bicluster (plus one for the last zero slot's product), phase 2 a
 // work-item per slice of 4 rows.
 #include <limits>
@@ -14,7 +14,7 @@ static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb must be three packed floats
 
 // 64 work-items per group, as the `uncompressed` rows kernel (short PoCL work-item loops).
 constexpr std::size_t kWorkGroup = 64;
-// Biclusters per work-item of phase 1 (kernels/bicluster.cl).
+// Biclusters per work-item of phase 1 (compressors/bicluster/bicluster.cl).
 constexpr std::size_t kPhase1PerItem = 8;
 
 template <typename T>

@@ -72,7 +72,7 @@ std::string_view to_string(KernelVariant v) {
 
 KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device) {
   if (requested != KernelVariant::kAuto) return requested;
-  // Measured on PoCL (docs/backends/uncompressed.md): a work-item per row matches the C++ loop,
+  // Measured on PoCL (compressors/uncompressed/README.md): a work-item per row matches the C++ loop,
   // lanes cost barriers that PoCL turns into work-item loops. On GPUs, lanes give coalesced reads.
   return device.is_cpu ? KernelVariant::kRows : KernelVariant::kLanes;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // Backend `uncompressed`: the exact CSR transfer T, stored as it is computed (u32 row offsets,
 // u16 or u32 column ids, u8 counts times one scale 1/s^2). The reference every other backend is
-// measured against, and the speed baseline for relighting (docs/backends/uncompressed.md).
+// measured against, and the speed baseline for relighting (compressors/uncompressed/README.md).
 //
 // Parameters (besides the shared "seed", which nothing here uses: the backend is deterministic):
 //   opencl_kernel  auto | rows | lanes   which OpenCL variant upload() builds; auto picks by

@@ -1,4 +1,4 @@
-// The OpenCL relight of backend `uncompressed` (kernels/uncompressed.cl).
+// The OpenCL relight of backend `uncompressed` (compressors/uncompressed/uncompressed.cl).
 #include <bit>
 #include <limits>
 

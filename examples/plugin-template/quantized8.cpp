@@ -2,7 +2,8 @@
 // build-tree) prtlab. It is the template of docs/adding-a-compressor.md: copy this folder, rename
 // the backend, replace the method. Everything a backend needs is in this one file: parameters,
 // compression, storage accounting, FLOP count, error bound, C++ relight, OpenCL relight (kernel
-// source embedded below), save/load, and the two extern "C" entry points prtlab looks for.
+// source embedded below), save/load, and the one registration line at the bottom, the same PRT_REGISTER_COMPRESSOR an
+// in-tree backend ends with.
 //
 // Method. The exact transfer T stores every entry as a visibility count c in 1..s^2 with the
 // common scale 1/s^2 (transfer_matrix.h). quantized8 keeps T's sparsity (CSR; u16 column
@@ -37,11 +38,6 @@
 #include <span>
 #include <string>
 #include <vector>
-
-// Only the two entry points leave the library: the template is compiled with hidden visibility
-// and its copy of prtlab_core is kept private (CMakeLists.txt), so nothing here can clash with
-// the symbols of the prtlab executable that loads it.
-#define QUANTIZED8_EXPORT extern "C" __attribute__((visibility("default")))
 
 namespace quantized8 {
 namespace {
@@ -388,13 +384,8 @@ prt::CompressorEntry entry() {
 }  // namespace
 }  // namespace quantized8
 
-// The two entry points prt::load_plugin() looks up (compressor_registry.h). The version is
-// compiled in from the prtlab headers this plugin was built against; prtlab refuses the plugin
-// when it differs from its own, because the classes above would not match its ABI.
-QUANTIZED8_EXPORT int prtlab_plugin_api_version() {
-  return prt::kPluginApiVersion;
-}
-
-QUANTIZED8_EXPORT void prtlab_register_plugin(prt::CompressorRegistry& registry) {
-  registry.add(quantized8::entry());
-}
+// The line every backend ends with. When prtlab opens this library (--plugin), the registrar
+// runs and adds the entry to the registry of the prtlab that loads it (libprtlab_core.so is
+// shared). It carries the plugin API version of the headers this file was compiled with:
+// prtlab refuses the plugin, before calling entry(), when that differs from its own.
+PRT_REGISTER_COMPRESSOR(quantized8::entry);

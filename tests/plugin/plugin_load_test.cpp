@@ -183,8 +183,8 @@ TEST_F(TemplatePlugin, LoadingItAgainIsRefused) {
   try {
     load_plugin(kTemplatePlugin);
     FAIL() << "a second load registered quantized8 twice";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("'quantized8' is registered twice"));
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("already loaded"));
   }
   EXPECT_EQ(CompressorRegistry::instance().names(), before);
 }
@@ -205,14 +205,14 @@ TEST(PluginRefusal, AnotherApiVersionIsRefusedWithAClearMessage) {
   EXPECT_EQ(CompressorRegistry::instance().names(), before);
 }
 
-TEST(PluginRefusal, ALibraryWithoutEntryPointsIsNotAPlugin) {
+TEST(PluginRefusal, ALibraryThatRegistersNothingIsNotAPlugin) {
   ASSERT_TRUE(fs::exists(kNotAPlugin)) << kNotAPlugin;
   try {
     load_plugin(kNotAPlugin);
     FAIL() << "a library without entry points was accepted";
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("not a prtlab plugin"));
-    EXPECT_THAT(e.what(), HasSubstr("prtlab_plugin_api_version"));
+    EXPECT_THAT(e.what(), HasSubstr("PRT_REGISTER_COMPRESSOR"));
   }
 }
 

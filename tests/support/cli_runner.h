@@ -24,10 +24,12 @@ inline std::string slurp_file(const std::filesystem::path& p) {
 }
 
 /// `env` is prepended to the command line (e.g. "PRTLAB_CACHE=/tmp/x "); output files go to `dir`.
+/// `program` is the prtlab executable (the test build with the test-only backends is
+/// PRTLAB_TEST_CLI_PATH).
 inline CliResult run_cli(const std::string& args, const std::filesystem::path& dir,
-                         const std::string& env = {}) {
+                         const std::string& env = {}, const std::string& program = PRTLAB_CLI_PATH) {
   const auto out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = env + "\"" + std::string(PRTLAB_CLI_PATH) + "\" " + args + " >\"" +
+  const std::string cmd = env + "\"" + program + "\" " + args + " >\"" +
                           out.string() + "\" 2>\"" + err.string() + "\"";
   const int status = std::system(cmd.c_str());
   CliResult r;

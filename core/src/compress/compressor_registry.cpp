@@ -1,7 +1,5 @@
 #include "prtlab/compress/compressor_registry.h"
 
-#include <dlfcn.h>
-
 #include <numeric>
 
 #include "prtlab/storage/archive.h"
@@ -67,42 +65,25 @@ std::unique_ptr<Compressor> CompressorRegistry::create(
   return e.create(ParamSet(name, e.params, params));
 }
 
-std::vector<std::string> load_plugin(const std::filesystem::path& library) {
-  if (!std::filesystem::exists(library)) throw InputError(library, "plugin library not found");
-  // RTLD_NODELETE: a plugin's registered lambdas must outlive any handle we might drop.
-  void* handle = ::dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
-  if (!handle) throw InputError(library, fmt::format("cannot load plugin: {}", ::dlerror()));
-  using VersionFn = int (*)();
-  using RegisterFn = void (*)(CompressorRegistry&);
-  auto version = reinterpret_cast<VersionFn>(::dlsym(handle, "prtlab_plugin_api_version"));
-  auto reg = reinterpret_cast<RegisterFn>(::dlsym(handle, "prtlab_register_plugin"));
-  if (!version || !reg)
-    throw InputError(
-        library,
-        "not a prtlab plugin (it must export extern \"C\" prtlab_plugin_api_version() and "
-        "prtlab_register_plugin(prt::CompressorRegistry&))");
-  const int v = version();
-  if (v != kPluginApiVersion)
-    throw InputError(
-        library,
-        fmt::format("plugin API version {} does not match this prtlab's version {}; rebuild the "
-                    "plugin against this prtlab",
-                    v, kPluginApiVersion));
-  auto& registry = CompressorRegistry::instance();
-  const auto before = registry.names();
-  // Entries registered by the plugin are tagged with its path (for `prtlab list`).
-  CompressorRegistry staging;
-  reg(staging);
-  std::vector<std::string> added;
-  for (const auto& name : staging.names()) {
-    CompressorEntry e = staging.get(name);
-    e.origin = library.string();
-    registry.add(std::move(e));
-    added.push_back(name);
-  }
-  if (added.empty()) log_warn("plugin {} registered no compressor", library.string());
-  return added;
+namespace detail {
+
+void register_compressor_static(CompressorEntry (*make)(), int api) noexcept {
+  register_static({.api = api,
+                   .kind = "compressor",
+                   .add =
+                       [make](const std::string& origin) {
+                         CompressorEntry e = make();
+                         e.origin = origin;
+                         std::string name = e.name;
+                         CompressorRegistry::instance().add(std::move(e));
+                         return name;
+                       },
+                   .remove = [](const std::string& name) {
+                     CompressorRegistry::instance().remove(name);
+                   }});
 }
+
+}  // namespace detail
 
 void save_compressed(const CompressedTransfer& ct, const std::filesystem::path& file) {
   ArchiveWriter w(std::string(kCompressedKind), kCompressedKindVersion);

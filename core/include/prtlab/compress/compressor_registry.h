@@ -3,14 +3,10 @@
 //
 //   PRT_REGISTER_COMPRESSOR(my_backend_entry);   // at the bottom of compressors/<name>/<name>.cpp
 //
-// where my_backend_entry() returns a CompressorEntry. Backends are compiled as CMake OBJECT
-// libraries so their static registrars survive static linking; tests count the registry.
-// Plugins: a shared library exporting
-//
-//   extern "C" int prtlab_plugin_api_version();            // must return kPluginApiVersion
-//   extern "C" void prtlab_register_plugin(prt::CompressorRegistry&);
-//
-// is loaded by load_plugin(path) (the CLI's --plugin path.so).
+// where my_backend_entry() returns a CompressorEntry. The same line registers a plugin's
+// backend when load_plugin() opens the plugin (plugin.h). Built-in backends are CMake OBJECT
+// libraries, so their static registrars survive linking; a test derives the expected list of
+// backends from the folders and compares it with the registry.
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -20,11 +16,9 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/params.h"
+#include "prtlab/compress/plugin.h"
 
 namespace prt {
-
-/// Bumped whenever compressor.h / compressor_registry.h change in a way that breaks binaries.
-inline constexpr int kPluginApiVersion = 2;
 
 struct CompressorEntry {
   std::string name;
@@ -49,6 +43,8 @@ class CompressorRegistry {
   bool contains(const std::string& name) const { return entries_.contains(name); }
   const CompressorEntry& get(const std::string& name) const;  ///< throws, listing known names
   std::vector<std::string> names() const;
+  /// Removes an entry (a plugin that failed to load); unknown names are ignored.
+  void remove(const std::string& name) { entries_.erase(name); }
 
   /// Validate parameters and construct.
   std::unique_ptr<Compressor> create(const std::string& name,
@@ -58,16 +54,19 @@ class CompressorRegistry {
   std::map<std::string, CompressorEntry> entries_;
 };
 
-/// Static registrar used by PRT_REGISTER_COMPRESSOR.
+namespace detail {
+/// Registers make()'s entry in the global registry through register_static() (plugin.h):
+/// `api` is checked before make() runs.
+void register_compressor_static(CompressorEntry (*make)(), int api) noexcept;
+}  // namespace detail
+
+/// Static registrar used by PRT_REGISTER_COMPRESSOR. Inline, so that `api` is the plugin API
+/// version of the code that registers, not of the library that receives the entry.
 struct CompressorRegistrar {
-  explicit CompressorRegistrar(CompressorEntry (*make)()) {
-    CompressorRegistry::instance().add(make());
+  explicit CompressorRegistrar(CompressorEntry (*make)(), int api = kPluginApiVersion) noexcept {
+    detail::register_compressor_static(make, api);
   }
 };
-
-/// Load a plugin shared library; refuses a missing file, missing symbols or an API mismatch
-/// with a clear message. Returns the names it registered.
-std::vector<std::string> load_plugin(const std::filesystem::path& library);
 
 /// Save a compressed transfer with a header naming its backend; load dispatches on it.
 void save_compressed(const CompressedTransfer& ct, const std::filesystem::path& file);

@@ -4,7 +4,7 @@
 //   BICLUSTER_SCENE=bunny build/<dir>/tests/bicluster_measure_test
 //     --gtest_also_run_disabled_tests --gtest_filter='*LossyCurve*'     (one command line)
 //
-// LossyCurve prints the error-vs-cost table of docs/backends/bicluster.md: for each E, the
+// LossyCurve prints the error-vs-cost table of compressors/bicluster/README.md: for each E, the
 // computation and data percentages and the relative L2 and L1 errors of L* against the exact
 // double product over the evaluation lights (the `prtlab compress` evaluation).
 // GatherLocality prints how many distinct biclusters blocks of rows read under several
@@ -246,7 +246,7 @@ double median_ms(std::vector<double> v) {
 
 void relight_timing();
 
-// Reuse of P's lines in phase 2 under row orders (docs/backends/bicluster.md, "Row order"): an
+// Reuse of P's lines in phase 2 under row orders (compressors/bicluster/README.md, "Row order"): an
 // LRU stack simulation of the gathers, in 64-byte lines of P (4 products), with biclusters
 // numbered by first use in each order as pack() numbers them. Prints the share of gathers whose
 // line was last read within 32 KiB (512 lines) and beyond 256 KiB (4,096 lines) of other lines.

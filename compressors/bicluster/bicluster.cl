@@ -1,5 +1,5 @@
 // Backend `bicluster`: L* = sum_i B_i L in two kernels (Algorithm 2 of Sun et al.; layout in
-// compressors/bicluster/bicluster.h and docs/backends/bicluster.md):
+// compressors/bicluster/bicluster.h and compressors/bicluster/README.md):
 //
 //   bicluster_phase1   one work-item per bicluster: P_i = sum_m t_m L[k_m] (float4 RGB; zero
 //                      slots have no columns: 0); the extra work-item i = B zeroes the zero slot

@@ -1,6 +1,6 @@
 // Backend `uncompressed`: L* = T L with T in CSR (u32 row offsets, u16 or u32 column ids, u8
 // counts times one scale 1/s^2). Two variants; the host picks one per device
-// (docs/backends/uncompressed.md):
+// (compressors/uncompressed/README.md):
 //
 //   uncompressed_rows   one work-item per row. Best on CPUs (PoCL): each work-item streams its
 //                       row with four independent float4 accumulators, as the C++ loop does.
