@@ -215,9 +215,13 @@ struct Prepared {
   prt::LightCoeffs coeffs;
   double compress_seconds = 0;
   bool cache_hit = false;
-  std::unique_ptr<prt::DeviceRelighter> device;  // made on first use
-  std::string device_error;
-  bool device_tried = false;
+  // One upload per set of device options, made on first use.
+  struct Device {
+    std::unique_ptr<prt::DeviceRelighter> relighter;
+    std::string error;
+    bool tried = false;
+  };
+  std::map<std::string, Device> devices;
 };
 
 std::string params_label(const Params& p) {
@@ -284,31 +288,34 @@ void BM_BackendCpp(benchmark::State& state, const std::string& backend) {
                              p->cache_hit ? "" : ", compressed now"));
 }
 
-void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const Params& params) {
+void BM_BackendOpenCl(benchmark::State& state, const std::string& backend,
+                      const Params& device_options) {
   prt::ClContext* ctx = prt::default_context();
   if (ctx == nullptr) {
     state.SkipWithError("no OpenCL device");
     return;
   }
   Prepared* p = nullptr;
+  Prepared::Device* d = nullptr;
   try {
-    p = &prepared(backend, params);
-    if (!p->device_tried) {
-      p->device_tried = true;
-      p->device = p->ct->upload(*ctx);
-      if (!p->device) {
-        p->device_error = backend + " has no OpenCL relight";
+    p = &prepared(backend, {});
+    d = &p->devices[params_label(device_options)];
+    if (!d->tried) {
+      d->tried = true;
+      d->relighter = prt::upload_compressed(*p->ct, *ctx, device_options);
+      if (!d->relighter) {
+        d->error = backend + " has no OpenCL relight";
       } else {
-        p->device->relight_on_device(p->coeffs);  // first launch compiles for the group size
+        d->relighter->relight_on_device(p->coeffs);  // first launch compiles for the group size
       }
     }
   } catch (const std::exception& e) {
-    if (p) p->device_error = e.what();
+    if (d) d->error = e.what();
     state.SkipWithError(e.what());
     return;
   }
-  if (!p->device) {
-    state.SkipWithError(p->device_error.c_str());
+  if (!d->relighter) {
+    state.SkipWithError(d->error.c_str());
     return;
   }
   // Warm up before timing, every time (300 ms): the benchmark that ran just before (TBB's C++
@@ -316,10 +323,10 @@ void BM_BackendOpenCl(benchmark::State& state, const std::string& backend, const
   // medians of two identical variants (bicluster default and opencl_ids=u32 on a CPU) differed
   // by up to 1.6x, depending on which ran first (2026-12-01).
   const auto warm_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
-  while (std::chrono::steady_clock::now() < warm_until) p->device->relight_on_device(p->coeffs);
+  while (std::chrono::steady_clock::now() < warm_until) d->relighter->relight_on_device(p->coeffs);
   double total = 0;
   for (auto _ : state) {
-    const double s = p->device->relight_on_device(p->coeffs) * 1e-3;
+    const double s = d->relighter->relight_on_device(p->coeffs) * 1e-3;
     state.SetIterationTime(s);
     total += s;
   }
@@ -532,8 +539,8 @@ void register_benchmarks() {
                                  Params{})
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
-    for (const auto& spec : prt::CompressorRegistry::instance().get(name).params) {
-      if (!spec.key.starts_with("opencl_") || spec.type != prt::ParamType::kString) continue;
+    for (const auto& spec : prt::CompressorRegistry::instance().get(name).device_params) {
+      if (spec.type != prt::ParamType::kString) continue;
       for (const auto& choice : spec.choices) {
         if (choice == spec.default_value) continue;
         benchmark::RegisterBenchmark(

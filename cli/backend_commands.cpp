@@ -21,6 +21,7 @@ struct CompressCli {
   std::string scene;
   std::string backend;
   std::vector<std::string> params;
+  std::vector<std::string> device_params;
   bool json = false;
   bool force = false;
   int lights = 8;
@@ -45,13 +46,15 @@ void run_list(const ListCli& o) {
     nlohmann::json backends = nlohmann::json::array();
     for (const auto& name : reg.names()) {
       const auto& e = reg.get(name);
-      nlohmann::json params = nlohmann::json::array();
+      nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
       for (const auto& s : e.params) params.push_back(spec_json(s));
+      for (const auto& s : e.device_params) device.push_back(spec_json(s));
       backends.push_back({{"name", e.name},
                           {"description", e.description},
                           {"lossless", e.lossless},
                           {"origin", e.origin},
-                          {"parameters", params}});
+                          {"parameters", params},
+                          {"device_parameters", device}});
     }
     nlohmann::json shared = nlohmann::json::array();
     for (const auto& s : shared_param_specs()) shared.push_back(spec_json(s));
@@ -65,6 +68,9 @@ void run_list(const ListCli& o) {
     if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
     for (const auto& s : e.params)
       std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
+                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+    for (const auto& s : e.device_params)
+      std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
                   std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
   }
   std::printf("shared parameters:\n");
@@ -88,6 +94,8 @@ void run_compress(const CompressCli& o) {
   // Validate the backend and parameters before any expensive stage.
   const auto& entry = CompressorRegistry::instance().get(o.backend);
   (void)ParamSet(o.backend, entry.params, params);
+  const auto device_options = ParamSet::parse_assignments(o.device_params);
+  (void)CompressorRegistry::instance().device_options(o.backend, device_options);
 
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));
   StageCache cache;
@@ -104,7 +112,7 @@ void run_compress(const CompressCli& o) {
   auto ctx = open_device_from_options();
   const auto lights = evaluation_lights(desc.cubemap_resolution, o.lights);
   const BackendEvaluation ev =
-      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat);
+      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat, device_options);
   if (!o.save.empty()) save_compressed(*cr.compressed, o.save);
 
   const StorageReport storage = cr.compressed->storage();
@@ -207,6 +215,7 @@ void add_backend_commands(CLI::App& app) {
   c->add_option("scene", co->scene, "Scene name or .toml path")->required();
   c->add_option("--backend,-b", co->backend, "Backend name (prtlab list)")->required();
   c->add_option("--param,-p", co->params, "Backend parameter key=value (repeatable)");
+  c->add_option("--device-param", co->device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
   c->add_option("--lights", co->lights, "Number of evaluation environments (1-8)")
       ->check(CLI::Range(1, 8));
   c->add_option("--repeat", co->repeat, "Timed relights (median reported)")

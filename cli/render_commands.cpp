@@ -36,6 +36,7 @@ struct SceneCli {
   std::string scene;
   std::string backend;
   std::vector<std::string> params;
+  std::vector<std::string> device_params;
   std::string env;
   double rotate_deg = 0;
   std::string view;
@@ -64,6 +65,7 @@ void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("scene", o.scene, "Scene name or .toml path")->required();
   c->add_option("--backend,-b", o.backend, "Backend name (prtlab list)")->required();
   c->add_option("--param,-p", o.params, "Backend parameter key=value (repeatable)");
+  c->add_option("--device-param", o.device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
   auto* env = c->add_option("--env", o.env,
                             "Environment map: a lat-long EXR path or a name (courtyard, ...)");
   if (env_required) env->required();
@@ -95,6 +97,7 @@ struct Prepared {
   LatLongImage env;
   Camera camera;
   std::map<std::string, std::string> params;  // canonical
+  std::map<std::string, std::string> device_options;  // as given (--device-param)
   std::shared_ptr<const CompressedTransfer> compressed;
   bool transfer_cache_hit = false, compress_cache_hit = false;
   ShadingMaterials materials;
@@ -112,6 +115,8 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
   const auto assignments = ParamSet::parse_assignments(o.params);
   const auto& entry = CompressorRegistry::instance().get(o.backend);
   (void)ParamSet(o.backend, entry.params, assignments);
+  p.device_options = ParamSet::parse_assignments(o.device_params);
+  (void)CompressorRegistry::instance().device_options(o.backend, p.device_options);
   p.desc = parse_scene(resolve_scene(o.scene));
   (void)scene_view(p.desc, o.view);
   const std::string env_name = o.env.empty() ? default_env : o.env;
@@ -200,7 +205,7 @@ void run_render(const RenderCli& o) {
   const Cubemap background = resample_to_cubemap(
       o.rotate_deg == 0.0 ? p.env : rotate_latlong_y(p.env, o.rotate_deg), o.background_resolution);
   FrameRenderer renderer(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr,
-                         p.shading);
+                         p.shading, p.device_options);
   renderer.set_camera(p.camera);
   renderer.set_environment(env, &background);
   const FrameStats stats = renderer.render();
@@ -442,7 +447,8 @@ void run_fps(const FpsCli& o) {
     cameras.push_back(orbit_camera(p.camera, 360.0 * i / n));
     envs.push_back(environment_cubemap(p, o.rotate_deg + 360.0 * i / n));
   }
-  FrameRenderer r(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr, p.shading);
+  FrameRenderer r(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr, p.shading,
+                  p.device_options);
   // Warm-up: kernel builds, first launches, caches.
   r.set_camera(cameras[0]);
   r.set_environment(envs[0]);

@@ -48,6 +48,7 @@ struct RelightCli {
   bool eigen = true;
   std::string backend;
   std::vector<std::string> params;
+  std::vector<std::string> device_params;
 };
 
 void write_local_radiance(const LocalRadiance& out, const std::string& file,
@@ -80,7 +81,8 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc, const Scene
   auto ctx = open_device_from_options();
   std::vector<EvaluationLight> lights;
   lights.push_back({env_file.stem().string(), std::move(cube)});
-  const auto ev = evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat);
+  const auto ev = evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat,
+                                   ParamSet::parse_assignments(o.device_params));
   if (!o.out.empty()) {
     LocalRadiance out;
     cr.compressed->relight(cr.compressed->project_light(lights.front().radiance), out);
@@ -293,6 +295,7 @@ void add_transfer_commands(CLI::App& app) {
   r->add_option("--backend,-b", rel->backend,
                 "Relight with this backend's compressed transfer (default: exact T)");
   r->add_option("--param,-p", rel->params, "Backend parameter key=value (repeatable)");
+  r->add_option("--device-param", rel->device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
   r->callback([rel] { run_relight(*rel); });
 }
 

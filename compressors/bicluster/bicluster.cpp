@@ -22,8 +22,8 @@ typedef float F4 __attribute__((vector_size(16)));
 
 class BiclusterCompressor final : public Compressor {
  public:
-  BiclusterCompressor(std::uint64_t seed, int groups, double error, DeviceIds device_ids)
-      : seed_(seed), groups_(groups), error_(error), device_ids_(device_ids) {}
+  BiclusterCompressor(std::uint64_t seed, int groups, double error)
+      : seed_(seed), groups_(groups), error_(error) {}
 
   std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
                                                Progress& progress) const override {
@@ -56,7 +56,6 @@ class BiclusterCompressor final : public Compressor {
     } else {
       a = pack(b, t);
     }
-    a.device_ids = device_ids_;
     return std::make_unique<BiclusterTransfer>(std::move(a));
   }
 
@@ -64,7 +63,6 @@ class BiclusterCompressor final : public Compressor {
   std::uint64_t seed_;
   int groups_;
   double error_;
-  DeviceIds device_ids_;
 };
 
 std::int16_t narrow_count(std::int64_t v) {
@@ -451,8 +449,9 @@ void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) co
                     });
 }
 
-std::unique_ptr<DeviceRelighter> BiclusterTransfer::upload(ClContext& context) const {
-  return upload_arrays(context, a_);
+std::unique_ptr<DeviceRelighter> BiclusterTransfer::upload(ClContext& context,
+                                                           const ParamSet& device_options) const {
+  return upload_arrays(context, a_, parse_device_ids(device_options.get_string("opencl_ids")));
 }
 
 namespace {
@@ -485,7 +484,6 @@ void BiclusterTransfer::save(ArchiveWriter& w) const {
   w.add_meta("supersampling", a_.supersampling);
   w.add_meta("error", a_.error);
   w.add_meta("error_bound", a_.bound);
-  w.add_meta("opencl_ids", std::string(to_string(a_.device_ids)));
   w.add_section("bic_col_offsets", a_.bic_col_offsets);
   add_narrowed(w, "bic_columns", a_.bic_columns, narrow());
   w.add_section("bic_constants", a_.bic_constants);
@@ -508,11 +506,6 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   a.supersampling = r.meta_value<int>("supersampling");
   a.error = r.meta_value<double>("error");
   a.bound = r.meta_value<double>("error_bound");
-  try {
-    a.device_ids = parse_device_ids(r.meta_value<std::string>("opencl_ids"));
-  } catch (const ParameterError& e) {
-    throw InputError(r.path(), e.what());
-  }
   // Rows index the u32 lanes (and rows() is the empty lane's sentinel): checked without
   // overflowing the product.
   if (a.local_count <= 0 || a.pixel_count <= 0 || a.supersampling <= 0 ||
@@ -595,6 +588,8 @@ CompressorEntry registry_entry() {
        {},
        "lossy mode: relative L1 error budget E per light (0 = lossless); drops biclusters and "
        "residual terms while every column loses at most E of its L1 mass"},
+  };
+  e.device_params = {
       {"opencl_ids",
        ParamType::kString,
        "auto",
@@ -607,13 +602,13 @@ CompressorEntry registry_entry() {
   e.create = [](const ParamSet& params) -> std::unique_ptr<Compressor> {
     return std::make_unique<BiclusterCompressor>(static_cast<std::uint64_t>(params.get_int("seed")),
                                                  static_cast<int>(params.get_int("groups")),
-                                                 params.get_real("error"),
-                                                 parse_device_ids(params.get_string("opencl_ids")));
+                                                 params.get_real("error"));
   };
   e.load = &BiclusterTransfer::load;
   // 2: grouped parallel search, merge of identical biclusters, lossy mode, state version 2.
   // 3: phase 2's row order (rows sharing biclusters adjacent), state version 3.
-  e.version = 3;
+  // 4: the device option opencl_ids left the saved state, state version 4.
+  e.version = 4;
   return e;
 }
 

@@ -33,7 +33,7 @@ namespace bicluster {
 
 inline constexpr std::string_view kName = "bicluster";
 /// Version of this backend's archive sections and metadata (bumped when they change).
-inline constexpr int kStateVersion = 3;
+inline constexpr int kStateVersion = 4;
 /// Default of the "groups" parameter (compressors/bicluster/README.md has the measurements).
 inline constexpr int kDefaultGroups = 2;
 /// Rows per slice of phase 2.
@@ -46,7 +46,7 @@ inline constexpr std::size_t kRowWindow = 256;
 /// P = 0) that a lane steps on to pad or to cross a gap of 2^16 ids or more.
 inline constexpr std::uint32_t kZeroStride = 0x8000;
 
-/// Phase 2's id stream on the device (parameter "opencl_ids"): the stored u16 deltas decoded
+/// Phase 2's id stream on the device (device option "opencl_ids"): the stored u16 deltas decoded
 /// in the kernel, or expanded at upload to u32 ids (twice the bytes, no decoding); auto picks
 /// by device type (compressors/bicluster/README.md has the measurements).
 enum class DeviceIds { kAuto, kU16, kU32 };
@@ -62,7 +62,6 @@ struct BiclusterArrays {
   int supersampling = 1;
   double error = 0.0;  ///< the lossy mode's budget E (parameter "error"; 0 = lossless)
   double bound = 0.0;  ///< relative L1 bound actually used (<= error; 0 when lossless)
-  DeviceIds device_ids = DeviceIds::kAuto;  ///< the device path only (parameter "opencl_ids")
   // Phase 1: bicluster i has columns [bic_col_offsets[i], bic_col_offsets[i + 1]).
   std::vector<std::uint32_t> bic_col_offsets{0};  ///< per bicluster + 1
   std::vector<std::uint32_t> bic_columns;         ///< global pixel k, increasing per bicluster
@@ -134,7 +133,8 @@ class BiclusterTransfer final : public CompressedTransfer {
   ErrorNorm declared_error_norm() const override { return ErrorNorm::kRelativeL1; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
-  std::unique_ptr<DeviceRelighter> upload(ClContext& context) const override;
+  std::unique_ptr<DeviceRelighter> upload(ClContext& context,
+                                          const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;
 
  private:
@@ -144,7 +144,8 @@ class BiclusterTransfer final : public CompressedTransfer {
   std::size_t incidences_ = 0;
 };
 
-std::unique_ptr<DeviceRelighter> upload_arrays(ClContext& context, const BiclusterArrays& a);
+std::unique_ptr<DeviceRelighter> upload_arrays(ClContext& context, const BiclusterArrays& a,
+                                               DeviceIds device_ids = DeviceIds::kAuto);
 
 CompressorEntry registry_entry();
 

@@ -52,7 +52,7 @@ double event_ms(ClContext& ctx, cl::Event& event, const std::string& name) {
 
 class BiclusterDevice final : public DeviceRelighter {
  public:
-  BiclusterDevice(ClContext& ctx, const BiclusterArrays& a)
+  BiclusterDevice(ClContext& ctx, const BiclusterArrays& a, DeviceIds device_ids)
       : ctx_(ctx),
         rows_(a.rows()),
         cols_(static_cast<std::size_t>(a.pixel_count)),
@@ -72,8 +72,8 @@ class BiclusterDevice final : public DeviceRelighter {
         .set("PRT_PHASE1_PER_ITEM", kPhase1PerItem);
     const cl::Program program = build_program(ctx, "bicluster", defines);
     phase1_ = make_kernel(program, "bicluster_phase1");
-    wide_ids_ =
-        a.device_ids == DeviceIds::kU32 || (a.device_ids == DeviceIds::kAuto && ctx.info().is_cpu);
+    wide_ids_ = device_ids == DeviceIds::kU32 ||
+                (device_ids == DeviceIds::kAuto && ctx.info().is_cpu);
     phase2_ = make_kernel(program, wide_ids_ ? "bicluster_phase2_ids" : "bicluster_phase2");
     range1_ = LaunchRange::linear(biclusters_ / kPhase1PerItem + 1, kWorkGroup);
     const std::size_t products = a.product_count();
@@ -146,6 +146,7 @@ class BiclusterDevice final : public DeviceRelighter {
   }
 
   std::uint64_t device_bytes() const override { return bytes_; }
+  const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
   ClContext& ctx_;
@@ -163,8 +164,9 @@ class BiclusterDevice final : public DeviceRelighter {
 
 }  // namespace
 
-std::unique_ptr<DeviceRelighter> upload_arrays(ClContext& context, const BiclusterArrays& a) {
-  return std::make_unique<BiclusterDevice>(context, a);
+std::unique_ptr<DeviceRelighter> upload_arrays(ClContext& context, const BiclusterArrays& a,
+                                               DeviceIds device_ids) {
+  return std::make_unique<BiclusterDevice>(context, a, device_ids);
 }
 
 }  // namespace prt::bicluster

@@ -12,7 +12,6 @@ namespace {
 
 class UncompressedCompressor final : public Compressor {
  public:
-  explicit UncompressedCompressor(Options options) : options_(options) {}
 
   std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
                                                Progress& progress) const override {
@@ -23,14 +22,17 @@ class UncompressedCompressor final : public Compressor {
           "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
           t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
     }
-    auto out = std::make_unique<UncompressedTransfer>(t, options_);
+    auto out = std::make_unique<UncompressedTransfer>(t);
     progress.finish();
     return out;
   }
-
- private:
-  Options options_;
 };
+
+std::string column_type(const TransferMatrix& t) {
+  return t.narrow_columns() ? "u16" : "u32";
+}
+
+}  // namespace
 
 Options options_from(const ParamSet& params) {
   Options o;
@@ -43,12 +45,6 @@ Options options_from(const ParamSet& params) {
                     kName, o.lanes));
   return o;
 }
-
-std::string column_type(const TransferMatrix& t) {
-  return t.narrow_columns() ? "u16" : "u32";
-}
-
-}  // namespace
 
 KernelVariant parse_variant(const std::string& text) {
   if (text == "auto") return KernelVariant::kAuto;
@@ -77,8 +73,7 @@ KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device)
   return device.is_cpu ? KernelVariant::kRows : KernelVariant::kLanes;
 }
 
-UncompressedTransfer::UncompressedTransfer(TransferMatrix transfer, Options options)
-    : t_(std::move(transfer)), options_(options) {}
+UncompressedTransfer::UncompressedTransfer(TransferMatrix transfer) : t_(std::move(transfer)) {}
 
 StorageReport UncompressedTransfer::storage() const {
   const std::uint64_t nnz = t_.nnz();
@@ -120,8 +115,9 @@ void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out)
   relight_exact(t_, light.values, out.values);
 }
 
-std::unique_ptr<DeviceRelighter> UncompressedTransfer::upload(ClContext& context) const {
-  return upload_transfer(context, t_, options_);
+std::unique_ptr<DeviceRelighter> UncompressedTransfer::upload(
+    ClContext& context, const ParamSet& device_options) const {
+  return upload_transfer(context, t_, options_from(device_options));
 }
 
 void UncompressedTransfer::save(ArchiveWriter& archive) const {
@@ -130,8 +126,6 @@ void UncompressedTransfer::save(ArchiveWriter& archive) const {
   archive.add_meta("local_count", t_.local_count());
   archive.add_meta("pixel_count", t_.cols());
   archive.add_meta("supersampling", t_.supersampling());
-  archive.add_meta("opencl_kernel", std::string(to_string(options_.kernel)));
-  archive.add_meta("opencl_lanes", options_.lanes);
   archive.add_section("row_offsets", t_.row_offsets());
   if (t_.narrow_columns()) {
     archive.add_section("columns", t_.columns16());
@@ -151,18 +145,6 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
   const int m = r.meta_value<int>("local_count");
   const int n = r.meta_value<int>("pixel_count");
   const int s = r.meta_value<int>("supersampling");
-  Options options;
-  try {
-    options.kernel = parse_variant(r.meta_value<std::string>("opencl_kernel"));
-  } catch (const ParameterError& e) {
-    throw InputError(r.path(), e.what());
-  }
-  options.lanes = r.meta_value<int>("opencl_lanes");
-  if (options.lanes < 1 || options.lanes > 32 ||
-      !std::has_single_bit(static_cast<unsigned>(options.lanes)))
-    throw InputError(r.path(), fmt::format("{}: opencl_lanes {} is not a power of two in [1, 32]",
-                                           kName, options.lanes));
-
   std::vector<std::uint32_t> columns;
   const SectionInfo& info = r.section_info("columns");
   if (info.type == ElementType::kUInt16) {
@@ -175,7 +157,7 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
     TransferMatrix t =
         TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"),
                                  columns, r.section<std::uint8_t>("counts", columns.size()));
-    return std::make_unique<UncompressedTransfer>(std::move(t), options);
+    return std::make_unique<UncompressedTransfer>(std::move(t));
   } catch (const ParameterError& e) {
     throw InputError(r.path(), e.what());
   }
@@ -187,7 +169,7 @@ CompressorEntry registry_entry() {
   e.description =
       "exact CSR transfer (u32 row offsets, u16 columns, u8 counts x 1/s^2): the lossless "
       "reference";
-  e.params = {
+  e.device_params = {
       {"opencl_kernel",
        ParamType::kString,
        "auto",
@@ -206,8 +188,10 @@ CompressorEntry registry_entry() {
        "work-items per row of the lanes variant (a power of two)"},
   };
   e.lossless = true;
-  e.create = [](const ParamSet& params) -> std::unique_ptr<Compressor> {
-    return std::make_unique<UncompressedCompressor>(options_from(params));
+  // 2: the device options left the saved state.
+  e.version = 2;
+  e.create = [](const ParamSet&) -> std::unique_ptr<Compressor> {
+    return std::make_unique<UncompressedCompressor>();
   };
   e.load = &UncompressedTransfer::load;
   return e;

@@ -3,7 +3,8 @@
 // u16 or u32 column ids, u8 counts times one scale 1/s^2). The reference every other backend is
 // measured against, and the speed baseline for relighting (compressors/uncompressed/README.md).
 //
-// Parameters (besides the shared "seed", which nothing here uses: the backend is deterministic):
+// Parameters: only the shared "seed", which nothing here uses (the backend is deterministic).
+// Device options (upload only, never saved):
 //   opencl_kernel  auto | rows | lanes   which OpenCL variant upload() builds; auto picks by
 //                                        device type (rows on CPUs, lanes on GPUs)
 //   opencl_lanes   1..32, a power of two lanes per row of the `lanes` variant
@@ -23,7 +24,7 @@ namespace uncompressed {
 
 inline constexpr std::string_view kName = "uncompressed";
 /// Version of this backend's archive sections and metadata (bumped when they change).
-inline constexpr int kStateVersion = 1;
+inline constexpr int kStateVersion = 2;
 
 enum class KernelVariant { kAuto, kRows, kLanes };
 KernelVariant parse_variant(const std::string& text);  ///< "auto", "rows", "lanes"
@@ -35,15 +36,16 @@ struct Options {
   KernelVariant kernel = KernelVariant::kAuto;
   int lanes = 8;  ///< power of two in [1, 32]
 };
+/// The device options of upload() (ParameterError for a lane count that is no power of two).
+Options options_from(const ParamSet& device_options);
 
 class UncompressedTransfer final : public CompressedTransfer {
  public:
-  UncompressedTransfer(TransferMatrix transfer, Options options);
+  explicit UncompressedTransfer(TransferMatrix transfer);
   /// The state written by save() (InputError naming the file when it is inconsistent).
   static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
 
   const TransferMatrix& matrix() const { return t_; }
-  const Options& options() const { return options_; }
 
   std::string backend() const override { return std::string(kName); }
   StorageReport storage() const override;
@@ -51,12 +53,12 @@ class UncompressedTransfer final : public CompressedTransfer {
   double declared_error_bound() const override { return 0.0; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
-  std::unique_ptr<DeviceRelighter> upload(ClContext& context) const override;
+  std::unique_ptr<DeviceRelighter> upload(ClContext& context,
+                                          const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;
 
  private:
   TransferMatrix t_;
-  Options options_;
 };
 
 /// T resident on `context`'s device, relit by the variant `options` asks for (resolved with

@@ -88,6 +88,7 @@ class UncompressedDevice final : public DeviceRelighter {
   }
 
   std::uint64_t device_bytes() const override { return bytes_; }
+  const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
   ClContext& ctx_;

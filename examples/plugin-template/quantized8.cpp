@@ -180,6 +180,7 @@ class Quantized8Device final : public prt::DeviceRelighter {
   }
 
   std::uint64_t device_bytes() const override { return device_bytes_; }
+  const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
   prt::ClContext& ctx_;
@@ -236,7 +237,9 @@ class Quantized8Transfer final : public prt::CompressedTransfer {
     });
   }
 
-  std::unique_ptr<prt::DeviceRelighter> upload(prt::ClContext& context) const override {
+  // quantized8 declares no device options (CompressorEntry::device_params), so the set is empty.
+  std::unique_ptr<prt::DeviceRelighter> upload(prt::ClContext& context,
+                                               const prt::ParamSet&) const override {
     return std::make_unique<Quantized8Device>(context, a_);
   }
 

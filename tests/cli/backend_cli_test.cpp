@@ -79,7 +79,15 @@ TEST_F(BackendCli, BadBackendOrParameterIsAClearError) {
   r = run("compress tiny-sphere-plane --backend uncompressed --param bogus=1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("unknown parameter 'bogus'"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("opencl_kernel"), std::string::npos) << r.err;  // lists the valid ones
+  EXPECT_NE(r.err.find("seed"), std::string::npos) << r.err;  // lists the valid ones
+  // Kernel variants are device options, not parameters (they never enter the cache key).
+  r = run("compress tiny-sphere-plane --backend uncompressed --param opencl_kernel=lanes");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown parameter 'opencl_kernel'"), std::string::npos) << r.err;
+  r = run("compress tiny-sphere-plane --backend uncompressed --device-param opencl_kernel=bogus");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("opencl_kernel"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("rows"), std::string::npos) << r.err;  // lists the choices
   r = run("compress tiny-sphere-plane --backend uncompressed --param seed=-1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("out of range"), std::string::npos) << r.err;

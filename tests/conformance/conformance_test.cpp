@@ -8,9 +8,9 @@
 //     result declares 0 and gets 1e-6 relative for float rounding, as relative L2 and as
 //     max-norm error. A backend registered as lossless must declare 0 at its defaults;
 //   - the OpenCL relight vs the C++ reference within 1e-5 relative (skipped with a message
-//     when the machine has no OpenCL device). Parameters named "opencl_*" may only change the
-//     device path, so the check runs over every combination of their values (string choices,
-//     bools, and the two ends and the default of integer ranges);
+//     when the machine has no OpenCL device), over every combination of the backend's device
+//     options (string choices, bools, and the two ends and the default of integer ranges), and
+//     the relighter's output_buffer() holding exactly what it read back;
 //   - save/load round trip: same backend, storage report, FLOPs, light projection and
 //     bit-identical relight; saving the loaded transfer again gives the same bytes;
 //   - storage and FLOPs positive for a non-empty T, and the storage total consistent with the
@@ -34,6 +34,7 @@
 
 #include "conformance/synthetic_cases.h"
 #include "prtlab/storage/archive.h"
+#include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
@@ -231,11 +232,10 @@ struct TempFile {
   }
 };
 
-// Every combination of the device-only ("opencl_*") parameters of a backend.
+// Every combination of the device options (CompressorEntry::device_params) of a backend.
 std::vector<Params> device_param_sets(const CompressorEntry& entry) {
   std::vector<Params> sets{{}};
-  for (const auto& spec : entry.params) {
-    if (!spec.key.starts_with("opencl_")) continue;
+  for (const auto& spec : entry.device_params) {
     std::vector<std::string> values;
     switch (spec.type) {
       case prt::ParamType::kString:
@@ -343,10 +343,10 @@ TEST_P(Conformance, OpenClMatchesTheCppReference) {
   ClContext* ctx = default_context();
   if (ctx == nullptr)
     GTEST_SKIP() << "no OpenCL device on this machine: the device path is not tested here";
-  for (const Params& params : device_param_sets(entry())) {
-    SCOPED_TRACE("parameters " + describe(params));
-    const auto ct = compress(backend(), data(), params);
-    auto device = ct->upload(*ctx);
+  const auto ct = compress(backend(), data(), {});
+  for (const Params& options : device_param_sets(entry())) {
+    SCOPED_TRACE("device options " + describe(options));
+    auto device = upload_compressed(*ct, *ctx, options);
     ASSERT_NE(device, nullptr) << "registered backends must provide an OpenCL relight";
     if (non_empty()) {
       EXPECT_GT(device->device_bytes(), 0u);
@@ -371,6 +371,13 @@ TEST_P(Conformance, OpenClMatchesTheCppReference) {
       EXPECT_GE(device->relight_on_device(coeffs), 0.0);
       device->relight(coeffs, again);
       EXPECT_TRUE(bit_identical(again, gpu)) << "two device relights of the same light differ";
+      if (!again.values.empty()) {
+        LocalRadiance from_buffer = again;
+        download(*ctx, device->output_buffer(), std::span<Rgb>(from_buffer.values),
+                 "conformance output buffer");
+        EXPECT_TRUE(bit_identical(from_buffer, again))
+            << "output_buffer() does not hold the L* the relighter reads back";
+      }
     }
   }
 }

@@ -153,7 +153,7 @@ TEST_F(TemplatePlugin, OpenClMatchesTheCppRelight) {
   for (int bits : {8, 2}) {
     SCOPED_TRACE(::testing::Message() << "bits = " << bits << " on " << ctx->info().label());
     const auto ct = compress(bits);
-    const auto device = ct->upload(*ctx);
+    const auto device = upload_compressed(*ct, *ctx);
     ASSERT_NE(device, nullptr);
     for (const Cubemap& light : data().lights) {
       const LightCoeffs coeffs = ct->project_light(light);

@@ -108,10 +108,7 @@ TEST(BiclusterLayout, ZeroSlotsCarryLanesAcrossLargeGaps) {
     // device (the zero slots above carry lanes across gaps of more than 2^16) and u32 ids
     // expanded at upload.
     for (const DeviceIds ids : {DeviceIds::kU16, DeviceIds::kU32}) {
-      BiclusterArrays variant_arrays = a;
-      variant_arrays.device_ids = ids;
-      const BiclusterTransfer variant(std::move(variant_arrays));
-      auto device = variant.upload(*ctx);
+      auto device = upload_arrays(*ctx, a, ids);
       LocalRadiance gpu;
       device->relight(light, gpu);
       ASSERT_EQ(gpu.values.size(), out.values.size());

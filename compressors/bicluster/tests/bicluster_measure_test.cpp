@@ -386,7 +386,7 @@ void relight_timing() {
     std::printf("worst per-value relative error %.2e\n", worst);
     double dev = 0;
     if (ctx) {
-      auto device = ct.upload(*ctx);
+      auto device = upload_compressed(ct, *ctx);
       std::vector<double> kms;
       for (int i = 0; i < reps; ++i) kms.push_back(device->relight_on_device(coeffs));
       dev = median_ms(kms);

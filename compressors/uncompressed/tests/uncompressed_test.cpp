@@ -4,6 +4,9 @@
 #include "uncompressed/uncompressed.h"
 
 #include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
 #include <unistd.h>
 
 #include <cstring>
@@ -108,17 +111,36 @@ TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
     EXPECT_EQ(parse_variant(std::string(to_string(v))), v);
 }
 
-TEST(Uncompressed, OptionsSurviveSaveAndLoad) {
+// Kernel variants are device options: not compression parameters, not saved, validated on
+// upload (range by the spec, the power of two by options_from).
+TEST(Uncompressed, KernelVariantsAreDeviceOptionsNotParameters) {
+  EXPECT_THROW(compress(small_transfer(), {{"opencl_kernel", "lanes"}}), ParameterError);
+  const auto& registry = CompressorRegistry::instance();
+  const Options o =
+      options_from(registry.device_options("uncompressed", {{"opencl_kernel", "lanes"},
+                                                            {"opencl_lanes", "4"}}));
+  EXPECT_EQ(o.kernel, KernelVariant::kLanes);
+  EXPECT_EQ(o.lanes, 4);
+  EXPECT_EQ(options_from(registry.device_options("uncompressed", {})).kernel,
+            KernelVariant::kAuto);
+  EXPECT_THROW(registry.device_options("uncompressed", {{"opencl_lanes", "64"}}), ParameterError);
+  EXPECT_THROW(options_from(registry.device_options("uncompressed", {{"opencl_lanes", "3"}})),
+               ParameterError);
+  EXPECT_THROW(registry.device_options("uncompressed", {{"seed", "1"}}), ParameterError)
+      << "the shared compression parameters are not device options";
+
   const fs::path file =
       fs::temp_directory_path() / ("prtlab_uncompressed_" + std::to_string(::getpid()) + ".prt");
-  save_compressed(*compress(small_transfer(), {{"opencl_kernel", "lanes"}, {"opencl_lanes", "4"}}),
-                  file);
+  save_compressed(*compress(small_transfer()), file);
+  const std::string bytes = [&] {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
   const auto loaded = load_compressed(file);
   fs::remove(file);
+  EXPECT_EQ(bytes.find("opencl"), std::string::npos) << "device options leaked into the file";
   const auto* u = dynamic_cast<const UncompressedTransfer*>(loaded.get());
   ASSERT_NE(u, nullptr);
-  EXPECT_EQ(u->options().kernel, KernelVariant::kLanes);
-  EXPECT_EQ(u->options().lanes, 4);
   EXPECT_EQ(u->matrix(), small_transfer());
 }
 
@@ -136,8 +158,6 @@ TEST(Uncompressed, InconsistentFilesAreInputErrors) {
     w.add_meta("local_count", 1);
     w.add_meta("pixel_count", 24);
     w.add_meta("supersampling", 2);
-    w.add_meta("opencl_kernel", "auto");
-    w.add_meta("opencl_lanes", 8);
     w.add_section("row_offsets", std::vector<std::uint32_t>{0, 1});
     w.add_section("columns", std::vector<std::uint16_t>{3});
     w.add_section("counts", std::move(counts));

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/data_paths.h"
 #include "prtlab/lighting/environment_map.h"
@@ -62,7 +63,8 @@ std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
 
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
-                                   int repeats) {
+                                   int repeats,
+                                   const std::map<std::string, std::string>& device_options) {
   BackendEvaluation ev;
   PRT_CHECK(!lights.empty(), "no evaluation lights");
   if (ct.output_basis() != RadianceBasis::kPixel)
@@ -99,7 +101,7 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
   ev.device = "none";
   if (context) {
     ev.device = context->info().label();
-    auto dev = ct.upload(*context);
+    auto dev = upload_compressed(ct, *context, device_options);
     if (dev) {
       LocalRadiance gpu;
       dev->relight(coeffs, gpu);

@@ -40,7 +40,16 @@ void CompressorRegistry::add(CompressorEntry entry) {
                             entries_.at(entry.name).origin, entry.origin));
   // Fail at registration, not at first use, when a backend's own specs are inconsistent.
   ParamSet validate(entry.name, entry.params, {});
+  ParamSet validate_device(entry.name + " (device options)", entry.device_params, {},
+                           ParamSet::Shared::kExclude);
   (void)validate;
+  (void)validate_device;
+  for (const auto& d : entry.device_params)
+    for (const auto& p : entry.params)
+      if (d.key == p.key)
+        throw Error(fmt::format("compressor registry: '{}' declares '{}' both as a parameter and "
+                                "as a device option",
+                                entry.name, d.key));
   auto name = entry.name;
   entries_.emplace(std::move(name), std::move(entry));
 }
@@ -63,6 +72,20 @@ std::unique_ptr<Compressor> CompressorRegistry::create(
     const std::string& name, const std::map<std::string, std::string>& params) const {
   const auto& e = get(name);
   return e.create(ParamSet(name, e.params, params));
+}
+
+ParamSet CompressorRegistry::device_options(
+    const std::string& name, const std::map<std::string, std::string>& options) const {
+  const auto& e = get(name);
+  return ParamSet(name + " (device options)", e.device_params, options,
+                  ParamSet::Shared::kExclude);
+}
+
+std::unique_ptr<DeviceRelighter> upload_compressed(
+    const CompressedTransfer& ct, ClContext& context,
+    const std::map<std::string, std::string>& device_options) {
+  const auto& registry = CompressorRegistry::instance();
+  return ct.upload(context, registry.device_options(ct.backend(), device_options));
 }
 
 namespace detail {

@@ -111,10 +111,11 @@ std::span<const ParamSpec> shared_param_specs() {
 }
 
 ParamSet::ParamSet(std::string owner, std::span<const ParamSpec> specs,
-                   const std::map<std::string, std::string>& given)
+                   const std::map<std::string, std::string>& given, Shared shared)
     : owner_(std::move(owner)), given_(given) {
   std::vector<ParamSpec> all(specs.begin(), specs.end());
-  for (const auto& s : shared_param_specs()) all.push_back(s);
+  if (shared == Shared::kInclude)
+    for (const auto& s : shared_param_specs()) all.push_back(s);
   for (const auto& s : all) {
     PRT_CHECK(!types_.contains(s.key), "duplicate parameter '{}' in {}", s.key, owner_);
     types_[s.key] = s.type;

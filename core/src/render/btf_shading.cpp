@@ -116,6 +116,9 @@ struct DeviceBtfShader::Impl {
   cl::Kernel single, view_cache, cached;
   cl::Buffer indices, btf, part_offset, part_info;
   cl::Buffer code, slot_ids, slot_geom, slot_view, radiance, cache, background, image;
+  // The buffer the kernels read L* from: `radiance` (uploaded by set_radiance) or a
+  // relighter's output buffer (set_radiance_buffer).
+  cl::Buffer radiance_source;
   std::size_t pixel_capacity = 0, slot_capacity = 0, cache_capacity = 0;
   std::uint64_t static_bytes = 0;
 
@@ -310,6 +313,19 @@ void DeviceBtfShader::set_radiance(const LocalRadiance& radiance) {
         s.vertices, s.m, to_string(radiance.basis), radiance.vertices, radiance.dim));
   write_buffer(s.ctx, s.radiance, radiance.values.data(), radiance.values.size() * sizeof(Rgb),
                "shading local radiance");
+  s.radiance_source = s.radiance;
+  s.have_radiance = true;
+}
+
+void DeviceBtfShader::set_radiance_buffer(const cl::Buffer& radiance) {
+  Impl& s = *impl_;
+  const std::size_t need = s.vertices * static_cast<std::size_t>(s.m) * sizeof(Rgb);
+  const auto size = radiance.getInfo<CL_MEM_SIZE>();
+  if (size < need)
+    throw ParameterError(fmt::format(
+        "BTF shading: the local radiance buffer holds {} bytes; {} vertices x M = {} need {}",
+        size, s.vertices, s.m, need));
+  s.radiance_source = radiance;
   s.have_radiance = true;
 }
 
@@ -321,7 +337,8 @@ double DeviceBtfShader::shade() {
   if (s.pixels == 0) return 0.0;  // OpenCL forbids an empty launch
   const auto pixels = static_cast<cl_uint>(s.pixels);
   if (!s.options.cache_view_vectors) {
-    set_args(s.single, pixels, s.code, s.slot_ids, s.slot_geom, s.slot_view, s.indices, s.radiance,
+    set_args(s.single, pixels, s.code, s.slot_ids, s.slot_geom, s.slot_view, s.indices,
+             s.radiance_source,
              s.btf, s.part_offset, s.part_info, s.background, s.image);
     cl::Event ev =
         launch(s.ctx, "btf_shade_single", s.single, LaunchRange::linear(s.pixels, kWorkGroup));
@@ -335,7 +352,7 @@ double DeviceBtfShader::shade() {
     s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache");
   }
   s.cache_valid = true;
-  set_args(s.cached, pixels, s.code, s.slot_ids, s.slot_geom, s.indices, s.radiance,
+  set_args(s.cached, pixels, s.code, s.slot_ids, s.slot_geom, s.indices, s.radiance_source,
            s.slots > 0 ? s.cache : s.slot_geom, s.background, s.image);
   cl::Event ev =
       launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.pixels, kWorkGroup));

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/base/error.h"
 
@@ -29,7 +31,11 @@ struct FrameRenderer::Impl {
   std::optional<DeviceBtfShader> shader;
 
   GBuffer gbuffer;
-  LocalRadiance radiance;
+  // On the device path L* stays on the device (the shader reads the relighter's output buffer)
+  // and is read back only when radiance() asks for it.
+  mutable LocalRadiance radiance;
+  mutable bool radiance_on_host = false;
+  int local_count = 0;  ///< M
   std::optional<Cubemap> environment;
   std::optional<Cubemap> background;  // what misses show; the lighting cubemap by default
   bool have_camera = false;
@@ -50,7 +56,8 @@ struct FrameRenderer::Impl {
 
 FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                              std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
-                             const ShadingOptions& options) {
+                             const ShadingOptions& options,
+                             const std::map<std::string, std::string>& device_options) {
   if (!transfer) throw ParameterError("frame renderer: no compressed transfer given");
   if (transfer->output_basis() != RadianceBasis::kPixel)
     throw ParameterError(
@@ -63,14 +70,17 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
   impl_ = std::make_unique<Impl>(std::move(mesh), std::move(materials), std::move(transfer),
                                  context, options);
   Impl& s = *impl_;
+  s.local_count = s.materials.part_btf.front()->light_count();
   if (context) {
-    s.relighter = s.transfer->upload(*context);
+    s.relighter = upload_compressed(*s.transfer, *context, device_options);
     if (!s.relighter)
       throw ParameterError(
           fmt::format("frame renderer: backend '{}' has no OpenCL relight (run "
                       "with --no-opencl for the C++ path)",
                       s.transfer->backend()));
     s.shader.emplace(*context, s.mesh, s.materials, nullptr, options);
+    // Checks the buffer's size against the mesh before the first frame.
+    s.shader->set_radiance_buffer(s.relighter->output_buffer());
   }
 }
 
@@ -98,22 +108,27 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
   const LightCoeffs light = s.transfer->project_light(environment);
   s.pending.project_ms += ms_since(t0);
   t0 = Clock::now();
-  if (s.relighter)
-    s.pending.relight_kernel_ms += s.relighter->relight(light, s.radiance);
-  else
+  if (s.relighter) {
+    // The shader reads L* where the relight left it: no read-back, no upload.
+    s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
+    s.radiance_on_host = false;
+  } else {
     s.transfer->relight(light, s.radiance);
+    s.radiance_on_host = true;
+    if (s.radiance.basis != RadianceBasis::kPixel ||
+        s.radiance.vertices != s.mesh.positions.size())
+      throw ParameterError(
+          fmt::format("frame renderer: backend '{}' produced {} values for {} "
+                      "vertices; the mesh has {}",
+                      s.transfer->backend(), s.radiance.values.size(), s.radiance.vertices,
+                      s.mesh.positions.size()));
+  }
   s.pending.relight_ms += ms_since(t0);
-  if (s.radiance.basis != RadianceBasis::kPixel || s.radiance.vertices != s.mesh.positions.size())
-    throw ParameterError(
-        fmt::format("frame renderer: backend '{}' produced {} values for {} "
-                    "vertices; the mesh has {}",
-                    s.transfer->backend(), s.radiance.values.size(), s.radiance.vertices,
-                    s.mesh.positions.size()));
   s.environment.emplace(environment);
   s.background.emplace(background ? *background : environment);
   if (s.shader) {
     t0 = Clock::now();
-    s.shader->set_radiance(s.radiance);
+    s.shader->set_radiance_buffer(s.relighter->output_buffer());
     s.shader->set_background(&*s.background);
     s.pending.upload_ms += ms_since(t0);
   }
@@ -159,7 +174,15 @@ const GBuffer& FrameRenderer::gbuffer() const {
   return impl_->gbuffer;
 }
 const LocalRadiance& FrameRenderer::radiance() const {
-  return impl_->radiance;
+  const Impl& s = *impl_;
+  if (!s.radiance_on_host && s.relighter && s.environment) {
+    s.radiance = LocalRadiance(RadianceBasis::kPixel, s.local_count, s.mesh.positions.size());
+    if (!s.radiance.values.empty())
+      download(*s.context, s.relighter->output_buffer(), std::span<Rgb>(s.radiance.values),
+               "frame renderer local radiance");
+    s.radiance_on_host = true;
+  }
+  return s.radiance;
 }
 const DeviceBtfShader* FrameRenderer::device_shader() const {
   return impl_->shader ? &*impl_->shader : nullptr;

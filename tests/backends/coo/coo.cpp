@@ -78,7 +78,7 @@ void CooTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   }
 }
 
-std::unique_ptr<DeviceRelighter> CooTransfer::upload(ClContext& context) const {
+std::unique_ptr<DeviceRelighter> CooTransfer::upload(ClContext& context, const ParamSet&) const {
   return upload_triplets(context, t_);
 }
 

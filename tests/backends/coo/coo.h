@@ -38,7 +38,8 @@ class CooTransfer final : public CompressedTransfer {
   double declared_error_bound() const override { return 0.0; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
-  std::unique_ptr<DeviceRelighter> upload(ClContext& context) const override;
+  std::unique_ptr<DeviceRelighter> upload(ClContext& context,
+                                          const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;
 
  private:

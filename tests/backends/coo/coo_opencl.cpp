@@ -60,6 +60,7 @@ class CooDevice final : public DeviceRelighter {
   }
 
   std::uint64_t device_bytes() const override { return bytes_; }
+  const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
   ClContext& ctx_;

@@ -5,6 +5,7 @@
 // light; the summary is the mean and the maximum over the light set. Lights: the 8 Blender
 // world maps when the data cache has them, else procedural sun-and-sky variants.
 // Time: median over `repeats` relights, C++ (wall) and OpenCL (kernel time from events).
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,9 +43,11 @@ struct BackendEvaluation {
 };
 
 /// Evaluate `ct` on `lights` (error per light vs the exact product with `exact`), timing the
-/// first light's relight `repeats` times. `context` may be null (no OpenCL).
+/// first light's relight `repeats` times. `context` may be null (no OpenCL); the device path
+/// is uploaded with `device_options` (the backend's device_params).
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
-                                   int repeats);
+                                   int repeats,
+                                   const std::map<std::string, std::string>& device_options = {});
 
 }  // namespace prt

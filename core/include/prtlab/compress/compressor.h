@@ -20,6 +20,10 @@
 #include "prtlab/compress/params.h"
 #include "prtlab/base/progress.h"
 
+namespace cl {
+class Buffer;
+}
+
 namespace prt {
 
 class TransferMatrix;
@@ -27,6 +31,7 @@ class ShTransfer;
 class ArchiveWriter;
 class ArchiveReader;
 class ClContext;
+class ParamSet;
 
 /// What a compressor sees: the exact transfer and the bases it lives in.
 struct TransferInput {
@@ -65,6 +70,10 @@ class DeviceRelighter {
   virtual double relight_on_device(const LightCoeffs& light) = 0;
   /// Bytes of device memory held.
   virtual std::uint64_t device_bytes() const = 0;
+  /// The device buffer every relight writes L* into: rows x 3 floats (packed RGB, the layout of
+  /// LocalRadiance::values, in output_basis()). The frame loop shades from it directly, so a
+  /// light change never copies L* through the host. Valid after the first relight.
+  virtual const cl::Buffer& output_buffer() const = 0;
 };
 
 class CompressedTransfer {
@@ -94,8 +103,12 @@ class CompressedTransfer {
   virtual void relight(const LightCoeffs& light, LocalRadiance& out) const = 0;
   /// OpenCL relight; a backend without a kernel returns nullptr (the conformance suite
   /// reports that as a failure for registered backends). The relighter may keep a reference
-  /// to `context`, which must outlive it.
-  virtual std::unique_ptr<DeviceRelighter> upload(ClContext& context) const = 0;
+  /// to `context`, which must outlive it. `device_options` holds the backend's
+  /// CompressorEntry::device_params (kernel variants, work sizes): they choose how the device
+  /// computes, never what, so they are neither saved nor part of any cache key. Callers go
+  /// through upload_compressed() (compressor_registry.h), which validates them.
+  virtual std::unique_ptr<DeviceRelighter> upload(ClContext& context,
+                                                  const ParamSet& device_options) const = 0;
 
   /// Serialise the backend's state (the registry writes the header and backend name).
   virtual void save(ArchiveWriter& archive) const = 0;

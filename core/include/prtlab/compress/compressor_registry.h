@@ -24,6 +24,11 @@ struct CompressorEntry {
   std::string name;
   std::string description;        ///< one line: the method and its paper
   std::vector<ParamSpec> params;  ///< backend-specific; shared ones are added by ParamSet
+  /// Options of the OpenCL path only (kernel variant, lanes, id width): they may change float
+  /// rounding, never the result otherwise. Passed to upload(), never to create(); not saved,
+  /// not in the stage-cache key, so changing one never recompresses. The conformance suite
+  /// checks every combination of their choices against the C++ relight.
+  std::vector<ParamSpec> device_params;
   bool lossless =
       false;  ///< at default parameters, relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
@@ -49,6 +54,9 @@ class CompressorRegistry {
   /// Validate parameters and construct.
   std::unique_ptr<Compressor> create(const std::string& name,
                                      const std::map<std::string, std::string>& params) const;
+  /// Validate device options against the backend's device_params (ParameterError listing them).
+  ParamSet device_options(const std::string& name,
+                          const std::map<std::string, std::string>& options) const;
 
  private:
   std::map<std::string, CompressorEntry> entries_;
@@ -67,6 +75,12 @@ struct CompressorRegistrar {
     detail::register_compressor_static(make, api);
   }
 };
+
+/// Upload `ct` to the device of `context` with its backend's device options (validated; the
+/// defaults for keys not given). Returns nullptr when the backend has no OpenCL path.
+std::unique_ptr<DeviceRelighter> upload_compressed(
+    const CompressedTransfer& ct, ClContext& context,
+    const std::map<std::string, std::string>& device_options = {});
 
 /// Save a compressed transfer with a header naming its backend; load dispatches on it.
 void save_compressed(const CompressedTransfer& ct, const std::filesystem::path& file);

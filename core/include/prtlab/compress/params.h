@@ -37,10 +37,13 @@ class ParamSet {
   using Value = std::variant<std::int64_t, double, bool, std::string>;
 
   ParamSet() = default;
-  /// Validates `given` against `specs` (plus the shared specs). `owner` names the backend in
-  /// messages.
+  /// Whether the shared specs (seed, ...) are added: yes for compression parameters, no for
+  /// device options (CompressorEntry::device_params).
+  enum class Shared { kInclude, kExclude };
+  /// Validates `given` against `specs` (plus the shared specs unless excluded). `owner` names
+  /// the backend in messages.
   ParamSet(std::string owner, std::span<const ParamSpec> specs,
-           const std::map<std::string, std::string>& given);
+           const std::map<std::string, std::string>& given, Shared shared = Shared::kInclude);
 
   std::int64_t get_int(const std::string& key) const;
   double get_real(const std::string& key) const;

@@ -29,6 +29,10 @@
 #include <span>
 #include <vector>
 
+namespace cl {
+class Buffer;
+}
+
 #include "prtlab/btf/btf.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/render/gbuffer.h"
@@ -85,6 +89,10 @@ class DeviceBtfShader {
 
   void set_gbuffer(const GBuffer& gbuffer);
   void set_radiance(const LocalRadiance& radiance);
+  /// Shade from L* already on the device (a DeviceRelighter's output_buffer(): vertices x M x
+  /// RGB floats, same context): no copy. The buffer must stay alive and is read at each
+  /// shade(). ParameterError when it is too small for the mesh.
+  void set_radiance_buffer(const cl::Buffer& radiance);
   /// A new background (the environment of a light change); nullptr: black. Its resolution
   /// may differ from the previous one's.
   void set_background(const Cubemap* background);

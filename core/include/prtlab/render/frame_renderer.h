@@ -2,8 +2,9 @@
 // The frame loop of bi-scale PRT (DESIGN.md "Data flow"; docs/rendering.md "Frame loop"):
 //
 //   view change  (set_camera)       trace the G-buffer (Embree), upload it; L* is reused
-//   light change (set_environment)  project the light into the backend's basis, relight,
-//                                   upload L* (and the environment as the background)
+//   light change (set_environment)  project the light into the backend's basis, relight (on
+//                                   the device, the shader reads L* where the relight wrote
+//                                   it), upload the environment as the background
 //   render()                        shade the current G-buffer with the current L*
 //
 // A FrameRenderer holds the scene's mesh, its materials, one compressed transfer (any backend,
@@ -13,6 +14,7 @@
 // previous render() and the running counters, so callers (prtlab fps, tests) can see that a
 // view-only change did not relight.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,8 +37,8 @@ struct FrameStageTimes {
   double gbuffer_ms = 0;         ///< view change: Embree primary rays
   double gbuffer_upload_ms = 0;  ///< view change: G-buffer compaction + upload (device path)
   double project_ms = 0;         ///< light change: CompressedTransfer::project_light
-  double relight_ms = 0;  ///< light change: relight (device: light upload, kernels, L* read-back)
-  double upload_ms = 0;   ///< light change: L* and background upload to the shader (device path)
+  double relight_ms = 0;  ///< light change: relight (device: light upload and kernels)
+  double upload_ms = 0;   ///< light change: background upload to the shader (device path)
   double shade_ms = 0;    ///< shading pass, waited for (device: kernels; C++: the reference)
   /// Device time of the shading kernels (OpenCL profiling; 0 on the C++ path), and the part of
   /// it spent building the view cache (0 unless the G-buffer changed).
@@ -67,16 +69,19 @@ class FrameRenderer {
   /// `context` null: C++ relight and shading. Throws ParameterError when the transfer's output
   /// is not in the pixel basis, its vertex count differs from the mesh's, or a material does
   /// not match (validate_materials).
+  /// `device_options`: the backend's device_params for its upload.
   FrameRenderer(Mesh mesh, ShadingMaterials materials,
                 std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
-                const ShadingOptions& options = {});
+                const ShadingOptions& options = {},
+                const std::map<std::string, std::string>& device_options = {});
   ~FrameRenderer();
   FrameRenderer(FrameRenderer&&) noexcept;
   FrameRenderer& operator=(FrameRenderer&&) noexcept;
 
   /// View change: trace and upload the G-buffer. L* is kept.
   void set_camera(const Camera& camera);
-  /// Light change: project, relight, upload L* and the background. `background`, when given,
+  /// Light change: project, relight (on the device path the shader then reads L* from the
+  /// relighter's output buffer: nothing crosses to the host), upload the background. `background`, when given,
   /// is what misses show (e.g. a finer cubemap of the same environment); without it misses
   /// show the lighting cubemap itself.
   void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
@@ -89,7 +94,9 @@ class FrameRenderer {
   const FrameCounters& counters() const;
   const Mesh& mesh() const;
   const GBuffer& gbuffer() const;         ///< of the current camera
-  const LocalRadiance& radiance() const;  ///< L* of the current environment
+  /// L* of the current environment (on the device path read back on the first call after a
+  /// light change).
+  const LocalRadiance& radiance() const;
   /// The device shader (nullptr on the C++ path): byte counts, hit pixels.
   const DeviceBtfShader* device_shader() const;
 
