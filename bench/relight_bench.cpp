@@ -50,16 +50,17 @@
 #include <vector>
 
 #include "prtlab/base/build_info.h"
-#include "prtlab/opencl/cl_context.h"
+#include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/content_hash.h"
 #include "prtlab/storage/data_paths.h"
+#include "prtlab/storage/stage_cache.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/random_transfer.h"
-#include "prtlab/geometry/scene.h"
 #include "prtlab/transfer/scene_transfer.h"
-#include "prtlab/storage/stage_cache.h"
 
 namespace {
 
@@ -78,6 +79,7 @@ struct Workload {
   std::unique_ptr<prt::CubemapLayout> cubemap;
   std::unique_ptr<prt::HemisphereGrid> grid;
   std::unique_ptr<prt::Cubemap> light;
+  std::optional<prt::PreparedScene> scene;  ///< the bunny, as the registered backends need it
 };
 
 // Same shape as the bunny: 3,286 vertices x M = 64 rows, N = 6,144, about 2,650 visible pixels
@@ -98,10 +100,11 @@ Workload make_workload() {
   try {
     const prt::SceneDesc desc = prt::parse_scene(prt::resolve_scene("bunny"));
     prt::StageCache cache;
-    prt::PrecomputeOptions options;
-    options.show_progress = true;
-    auto st = prt::precompute_scene_transfer(desc, options, cache);
-    w.transfer = std::move(st.result.transfer);
+    // Whatever the registered backends declare they need (SH, mesh, BTFs), prepared once.
+    const auto names = prt::CompressorRegistry::instance().names();
+    w.scene = prt::prepare_scene_for(desc, names, cache);
+    const prt::SceneTransfer& st = w.scene->transfer;
+    w.transfer = st.result.transfer;
     w.key = st.key;
     w.resolution = desc.cubemap_resolution;
     w.grid_side = desc.local_grid;
@@ -240,9 +243,11 @@ Prepared& prepared(const std::string& backend, const Params& params) {
   const Workload& w = workload();
   Prepared p;
   prt::StageCache cache;
-  auto result = prt::compress_cached(backend, params,
-                                     prt::TransferInput{w.transfer, nullptr, *w.cubemap, *w.grid},
-                                     w.key, cache, prt::CacheMode::kUse, false);
+  auto result = prt::compress_cached(
+      backend, params,
+      w.scene ? w.scene->input(prt::CompressorRegistry::instance().get(backend))
+              : prt::TransferInput{w.transfer, nullptr, *w.cubemap, *w.grid},
+      w.key, cache, prt::CacheMode::kUse, false);
   p.ct = std::move(result.compressed);
   p.compress_seconds = result.compress_seconds;
   p.cache_hit = result.cache_hit;
@@ -540,7 +545,7 @@ void register_benchmarks() {
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
     for (const auto& spec : prt::CompressorRegistry::instance().get(name).device_params) {
-      if (spec.type != prt::ParamType::kString) continue;
+      if (spec.type != prt::ParamType::kEnum) continue;
       for (const auto& choice : spec.choices) {
         if (choice == spec.default_value) continue;
         benchmark::RegisterBenchmark(

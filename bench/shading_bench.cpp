@@ -37,16 +37,19 @@
 #include <vector>
 
 #include "prtlab/base/build_info.h"
-#include "prtlab/opencl/cl_runtime.h"
-#include "prtlab/storage/data_paths.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/transfer/exact_relight.h"
-#include "prtlab/render/frame_renderer.h"
+#include "prtlab/base/statistics.h"
 #include "prtlab/geometry/scene.h"
-#include "prtlab/transfer/scene_transfer.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/storage/data_paths.h"
 #include "prtlab/storage/stage_cache.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace {
+
+using prt::median;
 
 struct Workload {
   std::string error;  // set when the bunny could not be prepared
@@ -165,11 +168,6 @@ double stream_pass_ms(prt::ClContext& ctx, bool strided) {
     e = prt::launch(ctx, "stream_blocks", s.blocks, prt::LaunchRange::linear(s.block_count));
   }
   return event_ms(e);
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 // GB/s of the faster pattern, median of 15 passes each.

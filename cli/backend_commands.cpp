@@ -3,10 +3,11 @@
 
 #include "commands.h"
 #include "prtlab/compress/backend_evaluation.h"
-#include "prtlab/opencl/cl_context.h"
-#include "prtlab/opencl/cl_device.h"
+#include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/opencl/cl_device.h"
 #include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/scene_transfer.h"
 
@@ -99,20 +100,18 @@ void run_compress(const CompressCli& o) {
 
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));
   StageCache cache;
-  PrecomputeOptions popt;
+  PrepareOptions popt;
   popt.show_progress = !global_options().quiet;
-  const SceneTransfer st = precompute_scene_transfer(desc, popt, cache);
-  const TransferMatrix& t = st.result.transfer;
-  const CubemapLayout layout(desc.cubemap_resolution);
-  const HemisphereGrid grid(desc.local_grid);
-  const TransferInput input{t, st.result.sh ? &*st.result.sh : nullptr, layout, grid};
+  const PreparedScene scene = prepare_scene(desc, entry.inputs, cache, popt);
+  const TransferMatrix& t = scene.transfer.result.transfer;
   const CompressionResult cr =
-      compress_cached(o.backend, params, input, st.key, cache,
+      compress_cached(o.backend, params, scene.input(entry), scene.transfer.key, cache,
                       o.force ? CacheMode::kRefresh : CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
   const auto lights = evaluation_lights(desc.cubemap_resolution, o.lights);
   const BackendEvaluation ev =
-      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat, device_options);
+      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr,
+                       {.repeats = o.repeat, .device_options = device_options});
   if (!o.save.empty()) save_compressed(*cr.compressed, o.save);
 
   const StorageReport storage = cr.compressed->storage();
@@ -144,6 +143,11 @@ void run_compress(const CompressCli& o) {
     for (const auto& e : ev.errors)
       per.push_back({{"light", e.light}, {"rel_l2", e.rel_l2}, {"max_rel", e.max_rel}});
     j["errors"] = per;
+    j["frobenius_rel_error"] = ev.frobenius.relative;
+    j["frobenius_rel_error_stderr"] = ev.frobenius.standard_error;
+    j["frobenius_exact"] = ev.frobenius.exact;
+    j["max_vertex_rel_error"] = ev.max_vertex_rel;
+    j["worst_vertex"] = ev.worst_vertex;
     j["ms_per_relight_cpp"] = ev.ms_cpp;
     j["ms_project_light"] = ev.ms_project;
     j["ms_per_relight_opencl"] =
@@ -168,6 +172,13 @@ void run_compress(const CompressCli& o) {
   std::printf(
       "error            rel. L2 mean %.3e, max %.3e over %zu lights (declared bound %.3g)\n",
       ev.mean_rel_l2, ev.max_rel_l2, ev.errors.size(), cr.compressed->declared_error_bound());
+  std::printf("                 Frobenius %.3e%s, worst vertex %.3e (vertex %zu)\n",
+              ev.frobenius.relative,
+              ev.frobenius.exact ? " (exact)"
+                                 : fmt::format(" (+- {:.1e}, {} relights)",
+                                               ev.frobenius.standard_error, ev.frobenius.relights)
+                                       .c_str(),
+              ev.max_vertex_rel, ev.worst_vertex);
   std::printf("relight C++      %.3f ms (+ %.3f ms light projection)\n", ev.ms_cpp, ev.ms_project);
   if (ev.ms_opencl)
     std::printf("relight OpenCL   %.3f ms kernel on %s (vs C++: %.2e rel. L2)\n", *ev.ms_opencl,
@@ -215,7 +226,9 @@ void add_backend_commands(CLI::App& app) {
   c->add_option("scene", co->scene, "Scene name or .toml path")->required();
   c->add_option("--backend,-b", co->backend, "Backend name (prtlab list)")->required();
   c->add_option("--param,-p", co->params, "Backend parameter key=value (repeatable)");
-  c->add_option("--device-param", co->device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
+  c->add_option("--device-param", co->device_params,
+                "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
+                "never recompresses)");
   c->add_option("--lights", co->lights, "Number of evaluation environments (1-8)")
       ->check(CLI::Range(1, 8));
   c->add_option("--repeat", co->repeat, "Timed relights (median reported)")

@@ -13,23 +13,21 @@
 #include "commands.h"
 #include "paper_numbers.h"
 #include "provenance.h"
-#include "prtlab/storage/atomic_file.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/lighting/environment_map.h"
-#include "prtlab/base/error.h"
 #include "prtlab/render/frame_renderer.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
 namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // Options shared by render and fps.
 struct SceneCli {
@@ -65,7 +63,9 @@ void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("scene", o.scene, "Scene name or .toml path")->required();
   c->add_option("--backend,-b", o.backend, "Backend name (prtlab list)")->required();
   c->add_option("--param,-p", o.params, "Backend parameter key=value (repeatable)");
-  c->add_option("--device-param", o.device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
+  c->add_option("--device-param", o.device_params,
+                "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
+                "never recompresses)");
   auto* env = c->add_option("--env", o.env,
                             "Environment map: a lat-long EXR path or a name (courtyard, ...)");
   if (env_required) env->required();
@@ -96,7 +96,7 @@ struct Prepared {
   fs::path env_file;
   LatLongImage env;
   Camera camera;
-  std::map<std::string, std::string> params;  // canonical
+  std::map<std::string, std::string> params;          // canonical
   std::map<std::string, std::string> device_options;  // as given (--device-param)
   std::shared_ptr<const CompressedTransfer> compressed;
   bool transfer_cache_hit = false, compress_cache_hit = false;
@@ -136,16 +136,13 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
 
   StageCache cache;
   const bool progress = !global_options().quiet;
-  PrecomputeOptions popt;
+  PrepareOptions popt;
   popt.show_progress = progress;
-  const SceneTransfer st = precompute_scene_transfer(p.desc, popt, cache);
-  const TransferMatrix& t = st.result.transfer;
-  p.transfer_cache_hit = st.cache_hit;
-  const CubemapLayout layout(p.desc.cubemap_resolution);
-  const HemisphereGrid grid(p.desc.local_grid);
-  const TransferInput input{t, st.result.sh ? &*st.result.sh : nullptr, layout, grid};
-  CompressionResult cr =
-      compress_cached(o.backend, assignments, input, st.key, cache, CacheMode::kUse, progress);
+  const PreparedScene scene = prepare_scene(p.desc, entry.inputs, cache, popt);
+  const TransferMatrix& t = scene.transfer.result.transfer;
+  p.transfer_cache_hit = scene.transfer.cache_hit;
+  CompressionResult cr = compress_cached(o.backend, assignments, scene.input(entry),
+                                         scene.transfer.key, cache, CacheMode::kUse, progress);
   p.params = cr.params;
   p.compress_cache_hit = cr.cache_hit;
   p.compressed = std::move(cr.compressed);
@@ -279,13 +276,6 @@ void run_render(const RenderCli& o) {
 }
 
 // ---- fps -------------------------------------------------------------------------------------
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Per-stage medians over frames (each stage separately; they need not sum to the median frame).
 FrameStageTimes stage_medians(const std::vector<FrameStageTimes>& frames) {

@@ -2,34 +2,29 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/storage/archive.h"
+#include "paper_numbers.h"
+#include "prtlab/base/statistics.h"
 #include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/lighting/environment_map.h"
+#include "prtlab/storage/archive.h"
+#include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
 namespace {
 
-// The paper's Table I numbers for the scenes it shares with us (DESIGN.md).
-struct PaperRow {
-  const char* scene;
-  double nnz_millions;
-  double mflops;
-  double data_mb;
-};
-constexpr PaperRow kPaper[] = {{"bunny", 10.6, 21.2, 1400},  {"armor", 21.9, 43.9, 9500},
-                               {"chair", 40.5, 81.0, 6300},  {"temple", 62.8, 125.6, 12600},
-                               {"bunny-12k", 39.2, 78.4, 0}, {"bunny-48k", 151.3, 302.6, 0}};
-const PaperRow* paper_row(const std::string& scene) {
-  for (const auto& r : kPaper)
-    if (scene == r.scene) return &r;
-  return nullptr;
+// The paper's numbers for a scene: its Table I column, else its Table II column (the one table
+// of experiments/paper_numbers.h).
+std::optional<experiments::PaperRow> paper_row(const std::string& scene) {
+  if (auto row = experiments::paper_row(experiments::PaperTable::kTable1, scene)) return row;
+  return experiments::paper_row(experiments::PaperTable::kTable2, scene);
 }
 
 struct PrecomputeCli {
@@ -69,20 +64,23 @@ void write_local_radiance(const LocalRadiance& out, const std::string& file,
   w.write(file);
 }
 
-void run_backend_relight(const RelightCli& o, const SceneDesc& desc, const SceneTransfer& st,
+void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
                          const std::filesystem::path& env_file, Cubemap cube) {
-  const TransferMatrix& t = st.result.transfer;
-  const CubemapLayout layout(desc.cubemap_resolution);
-  const HemisphereGrid grid(desc.local_grid);
-  const TransferInput input{t, st.result.sh ? &*st.result.sh : nullptr, layout, grid};
+  const auto& entry = CompressorRegistry::instance().get(o.backend);
   StageCache cache;
-  const auto cr = compress_cached(o.backend, ParamSet::parse_assignments(o.params), input, st.key,
-                                  cache, CacheMode::kUse, !global_options().quiet);
+  PrepareOptions popt;
+  popt.show_progress = !global_options().quiet;
+  const PreparedScene scene = prepare_scene(desc, entry.inputs, cache, popt);
+  const TransferMatrix& t = scene.transfer.result.transfer;
+  const auto cr =
+      compress_cached(o.backend, ParamSet::parse_assignments(o.params), scene.input(entry),
+                      scene.transfer.key, cache, CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
   std::vector<EvaluationLight> lights;
   lights.push_back({env_file.stem().string(), std::move(cube)});
-  const auto ev = evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr, o.repeat,
-                                   ParamSet::parse_assignments(o.device_params));
+  const auto ev = evaluate_backend(
+      *cr.compressed, t, lights, ctx ? &*ctx : nullptr,
+      {.repeats = o.repeat, .device_options = ParamSet::parse_assignments(o.device_params)});
   if (!o.out.empty()) {
     LocalRadiance out;
     cr.compressed->relight(cr.compressed->project_light(lights.front().radiance), out);
@@ -117,11 +115,6 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc, const Scene
   if (!o.out.empty()) std::printf("wrote          %s\n", o.out.c_str());
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
 SceneTransfer precompute(const SceneDesc& desc, bool force, int sh_order) {
   StageCache cache;
   PrecomputeOptions opt;
@@ -140,7 +133,7 @@ void run_precompute(const PrecomputeCli& o) {
   const double mflops = 2.0 * static_cast<double>(t.nnz()) / 1e6;
   const double dense_mb = static_cast<double>(t.dense_bytes()) / 1e6;
   const double stored_mb = static_cast<double>(t.memory_bytes()) / 1e6;
-  const PaperRow* paper = paper_row(desc.name);
+  const std::optional<experiments::PaperRow> paper = paper_row(desc.name);
   if (o.json) {
     nlohmann::json j;
     j["scene"] = desc.name;
@@ -201,11 +194,11 @@ void run_precompute(const PrecomputeCli& o) {
 
 void run_relight(const RelightCli& o) {
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));
-  const SceneTransfer st = precompute(desc, false, 0);
-  const TransferMatrix& t = st.result.transfer;
   const auto env_file = resolve_envmap(o.env);
   const Cubemap cube = resample_to_cubemap(load_latlong_exr(env_file), desc.cubemap_resolution);
-  if (!o.backend.empty()) return run_backend_relight(o, desc, st, env_file, cube);
+  if (!o.backend.empty()) return run_backend_relight(o, desc, env_file, cube);
+  const SceneTransfer st = precompute(desc, false, 0);
+  const TransferMatrix& t = st.result.transfer;
   const std::vector<Rgb> light = cube.light_vector();
 
   LocalRadiance out(RadianceBasis::kPixel, t.local_count(), t.vertex_count());
@@ -295,7 +288,9 @@ void add_transfer_commands(CLI::App& app) {
   r->add_option("--backend,-b", rel->backend,
                 "Relight with this backend's compressed transfer (default: exact T)");
   r->add_option("--param,-p", rel->params, "Backend parameter key=value (repeatable)");
-  r->add_option("--device-param", rel->device_params, "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; never recompresses)");
+  r->add_option("--device-param", rel->device_params,
+                "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
+                "never recompresses)");
   r->callback([rel] { run_relight(*rel); });
 }
 

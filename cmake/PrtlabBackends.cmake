@@ -11,6 +11,8 @@
 # Built-in backends (compressors/<name>/) go into every program through the INTERFACE library
 # prtlab_compressors; TEST_ONLY backends (tests/backends/<name>/) through prtlab_test_backends,
 # which only the tests and the test build of the CLI link.
+include(EmbedKernels)
+
 function(prtlab_add_backend dir)
   cmake_parse_arguments(ARG "TEST_ONLY" "" "" ${ARGN})
   get_filename_component(name ${dir} NAME)

@@ -19,8 +19,13 @@
 //    double-accumulated exact product (denominator: the exact value, floored at 1e-6 of the
 //    largest exact value so empty rows count in absolute terms). A lossless backend stays at
 //    float rounding (< kFloatRoundingBound); a dropped entry in a row of ~50 shows as ~1e-2.
+//
+// With an OpenCL context both parts run a second time through the backend's device relight
+// (uploaded once), so a kernel that drops or misplaces a term is caught as surely as the C++
+// path: the tables' "lossless" then covers the path the frame rates come from.
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "prtlab/compress/compressor.h"
@@ -34,26 +39,33 @@ inline constexpr double kFloatRoundingBound = 1e-5;
 struct LosslessOptions {
   int random_lights = 4;
   std::uint64_t seed = 1;
+  ClContext* device = nullptr;  ///< also check the OpenCL relight (null: C++ only)
 };
 
-struct LosslessCheck {
-  bool probe_applicable = false;   ///< the backend's light basis is the pixel basis
-  int columns_per_probe = 0;       ///< 3 g
-  int probe_weight_base = 0;       ///< s^2 + 1
+/// The findings of parts 1 and 2 on one relight path (C++ or OpenCL).
+struct LosslessPath {
   std::size_t probes = 0;          ///< relights used by part 1
   std::uint64_t probe_values = 0;  ///< (row, channel) outputs compared over all probes
   std::uint64_t mismatches = 0;    ///< of those, decoded to different counts
   /// max |s^2 (b - e)| over all probe outputs, in code units (0: bit-exact; a count off by one
   /// at digit i shows as (s^2 + 1)^i)
   double max_count_error = 0;
+  double random_max_rel_error = 0;  ///< part 2
+};
+
+struct LosslessCheck {
+  bool probe_applicable = false;  ///< the backend's light basis is the pixel basis
+  int columns_per_probe = 0;      ///< 3 g
+  int probe_weight_base = 0;      ///< s^2 + 1
   int random_lights = 0;
   std::uint64_t seed = 0;
-  double random_max_rel_error = 0;  ///< part 2
+  LosslessPath cpp;                    ///< the C++ relight
+  std::optional<LosslessPath> opencl;  ///< the device relight, when a context was given
+  std::string device;                  ///< its label ("" without one)
 
-  /// Part 1 found no mismatch (and ran) and part 2 stayed at float rounding.
-  bool exact() const {
-    return probe_applicable && mismatches == 0 && random_max_rel_error < kFloatRoundingBound;
-  }
+  /// On every path checked: part 1 found no mismatch (and ran) and part 2 stayed at float
+  /// rounding.
+  bool exact() const;
   /// "exact reconstruction" or a sentence saying what failed.
   std::string verdict() const;
 };

@@ -4,12 +4,12 @@
 
 #include <map>
 
+#include "prtlab/base/error.h"
 #include "prtlab/compress/backend_evaluation.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
-#include "prtlab/storage/data_paths.h"
-#include "prtlab/base/error.h"
 #include "prtlab/geometry/scene.h"
+#include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::experiments {
@@ -96,9 +96,9 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
   report(fmt::format("relight timing ({} repeats) and error over {} lights", o.repeats,
                      lights.size()));
   const BackendEvaluation ev_bic =
-      evaluate_backend(*bic.compressed, t, lights, o.device, o.repeats);
+      evaluate_backend(*bic.compressed, t, lights, o.device, {.repeats = o.repeats});
   const BackendEvaluation ev_ref =
-      evaluate_backend(*ref.compressed, t, lights, o.device, o.repeats);
+      evaluate_backend(*ref.compressed, t, lights, o.device, {.repeats = o.repeats});
   row.bicluster = timing_of(ev_bic);
   row.uncompressed = timing_of(ev_ref);
   row.ms_project_light = ev_bic.ms_project;
@@ -106,10 +106,12 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
   row.rel_l2_error_max = ev_bic.max_rel_l2;
 
   report("lossless check");
-  row.lossless = check_lossless(*bic.compressed, t, desc.cubemap_resolution, o.lossless);
+  LosslessOptions lossless = o.lossless;
+  lossless.device = o.device;
+  row.lossless = check_lossless(*bic.compressed, t, desc.cubemap_resolution, lossless);
   report(fmt::format("lossless: {} ({} probes, max count error {:.2g}; random lights {:.2g})",
-                     row.lossless.verdict(), row.lossless.probes, row.lossless.max_count_error,
-                     row.lossless.random_max_rel_error));
+                     row.lossless.verdict(), row.lossless.cpp.probes,
+                     row.lossless.cpp.max_count_error, row.lossless.cpp.random_max_rel_error));
   return row;
 }
 

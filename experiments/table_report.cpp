@@ -74,11 +74,19 @@ const std::vector<CsvColumn>& columns() {
       {"lossless",
        [](const SceneRow& r) { return std::string(r.lossless.exact() ? "exact" : "not-exact"); }},
       {"lossless_probe_mismatches",
-       [](const SceneRow& r) { return std::to_string(r.lossless.mismatches); }},
+       [](const SceneRow& r) { return std::to_string(r.lossless.cpp.mismatches); }},
       {"lossless_max_count_error",
-       [](const SceneRow& r) { return num(r.lossless.max_count_error); }},
+       [](const SceneRow& r) { return num(r.lossless.cpp.max_count_error); }},
       {"lossless_random_max_rel_error",
-       [](const SceneRow& r) { return num(r.lossless.random_max_rel_error); }},
+       [](const SceneRow& r) { return num(r.lossless.cpp.random_max_rel_error); }},
+      {"lossless_opencl_probe_mismatches",
+       [](const SceneRow& r) {
+         return r.lossless.opencl ? std::to_string(r.lossless.opencl->mismatches) : std::string();
+       }},
+      {"lossless_opencl_random_max_rel_error",
+       [](const SceneRow& r) {
+         return r.lossless.opencl ? num(r.lossless.opencl->random_max_rel_error) : std::string();
+       }},
   };
   return kColumns;
 }
@@ -304,19 +312,24 @@ std::string render_markdown(const TableResult& result) {
       "T with weights (s^2+1)^i, so each output decodes to T's counts exactly, compared with "
       "relight_exact; plus {} random non-negative lights (seed {}) against the "
       "double-accumulated exact product, which must stay under {:.0e} (float rounding). See "
-      "experiments/lossless_check.h.\n\n",
-      result.rows.empty() ? 0 : result.rows.front().lossless.probes,
+      "experiments/lossless_check.h. Both run on the C++ relight and, when an OpenCL device is "
+      "open, again on the device relight.\n\n",
+      result.rows.empty() ? 0 : result.rows.front().lossless.cpp.probes,
       result.parameters.value("lossless_random_lights", 0),
       result.parameters.value("lossless_seed", 0), kFloatRoundingBound);
   md +=
-      "| scene | verdict | probes | values compared | mismatches | max count error | random-light "
-      "max rel. error |\n";
-  md += "|---|---|---:|---:|---:|---:|---:|\n";
-  for (const auto& r : result.rows)
-    md +=
-        fmt::format("| {} | {} | {} | {} | {} | {:.2g} | {:.2g} |\n", r.scene, r.lossless.verdict(),
-                    r.lossless.probes, r.lossless.probe_values, r.lossless.mismatches,
-                    r.lossless.max_count_error, r.lossless.random_max_rel_error);
+      "| scene | path | verdict | probes | values compared | mismatches | max count error | "
+      "random-light max rel. error |\n";
+  md += "|---|---|---|---:|---:|---:|---:|---:|\n";
+  for (const auto& r : result.rows) {
+    auto row = [&](const char* path, const LosslessPath& p) {
+      md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2g} | {:.2g} |\n", r.scene, path,
+                        r.lossless.verdict(), p.probes, p.probe_values, p.mismatches,
+                        p.max_count_error, p.random_max_rel_error);
+    };
+    row("C++", r.lossless.cpp);
+    if (r.lossless.opencl) row("OpenCL", *r.lossless.opencl);
+  }
 
   md += "\n## Notes\n\n";
   for (const auto& n : table_notes(result)) md += "- " + n + "\n";

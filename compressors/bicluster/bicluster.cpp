@@ -9,9 +9,9 @@
 #include <numeric>
 
 #include "bicluster/bicluster_budget.h"
-#include "prtlab/storage/archive.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::bicluster {
@@ -27,13 +27,8 @@ class BiclusterCompressor final : public Compressor {
 
   std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
                                                Progress& progress) const override {
+    check_transfer_shape(input, kName);
     const TransferMatrix& t = input.transfer;
-    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
-        t.local_count() != input.grid.cell_count()) {
-      throw ParameterError(fmt::format(
-          "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
-          t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
-    }
     Biclustering b;
     std::vector<std::int64_t> mass;
     {
@@ -91,7 +86,8 @@ std::vector<std::uint32_t> offsets_from(const std::vector<std::uint32_t>& sizes)
 // streaming memory on the other core made the relight 2x slower. Here biclusters take, largest
 // first (ties: search order), their rows not yet placed; rows without a bicluster come last. Then,
 // within windows of kRowWindow rows, longer rows first, so that the four lanes of a slice have
-// similar lengths (less padding). compressors/bicluster/README.md, "Row order", has the measurements.
+// similar lengths (less padding). compressors/bicluster/README.md, "Row order", has the
+// measurements.
 std::vector<std::uint32_t> phase2_row_order(std::size_t rows,
                                             const std::vector<std::uint32_t>& sizes,
                                             const std::vector<std::uint32_t>& row_off,
@@ -135,13 +131,6 @@ std::string_view to_string(DeviceIds ids) {
       return "u32";
   }
   return "?";
-}
-
-DeviceIds parse_device_ids(std::string_view text) {
-  for (DeviceIds ids : {DeviceIds::kAuto, DeviceIds::kU16, DeviceIds::kU32})
-    if (text == to_string(ids)) return ids;
-  throw ParameterError(
-      fmt::format("{}: opencl_ids '{}' is not one of auto, u16, u32", kName, text));
 }
 
 SparseCounts counts_of(const TransferMatrix& t) {
@@ -386,11 +375,7 @@ LightCoeffs BiclusterTransfer::project_light(const Cubemap& radiance) const {
 }
 
 void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
-  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(a_.pixel_count)) {
-    throw ParameterError(fmt::format(
-        "{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}", kName,
-        a_.pixel_count, light.basis, light.values.size()));
-  }
+  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
   const std::size_t rows = a_.rows();
   if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
       out.vertices != a_.vertices || out.values.size() != rows) {
@@ -451,30 +436,12 @@ void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) co
 
 std::unique_ptr<DeviceRelighter> BiclusterTransfer::upload(ClContext& context,
                                                            const ParamSet& device_options) const {
-  return upload_arrays(context, a_, parse_device_ids(device_options.get_string("opencl_ids")));
+  return upload_arrays(
+      context, a_,
+      device_options.get_enum<DeviceIds>(
+          "opencl_ids",
+          {{"auto", DeviceIds::kAuto}, {"u16", DeviceIds::kU16}, {"u32", DeviceIds::kU32}}));
 }
-
-namespace {
-void add_narrowed(ArchiveWriter& w, const std::string& name, const std::vector<std::uint32_t>& c,
-                  bool narrow) {
-  if (narrow) {
-    std::vector<std::uint16_t> c16(c.begin(), c.end());
-    w.add_section(name, std::move(c16));
-  } else {
-    w.add_section(name, c);
-  }
-}
-
-// A section written by add_narrowed, as u32 (count: the expected size, or any when 0).
-std::vector<std::uint32_t> read_widened(const ArchiveReader& r, const std::string& name,
-                                        std::size_t count = 0) {
-  if (r.section_info(name).type == ElementType::kUInt16) {
-    const auto v = count ? r.view<std::uint16_t>(name, count) : r.view<std::uint16_t>(name);
-    return {v.begin(), v.end()};
-  }
-  return count ? r.section<std::uint32_t>(name, count) : r.section<std::uint32_t>(name);
-}
-}  // namespace
 
 void BiclusterTransfer::save(ArchiveWriter& w) const {
   w.add_meta("bicluster_version", kStateVersion);
@@ -485,10 +452,10 @@ void BiclusterTransfer::save(ArchiveWriter& w) const {
   w.add_meta("error", a_.error);
   w.add_meta("error_bound", a_.bound);
   w.add_section("bic_col_offsets", a_.bic_col_offsets);
-  add_narrowed(w, "bic_columns", a_.bic_columns, narrow());
+  w.add_indices("bic_columns", a_.bic_columns, narrow());
   w.add_section("bic_constants", a_.bic_constants);
   w.add_section("slice_offsets", a_.slice_offsets);
-  add_narrowed(w, "slice_rows", a_.slice_rows, narrow_rows());
+  w.add_indices("slice_rows", a_.slice_rows, narrow_rows());
   w.add_section("slice_base", a_.slice_base);
   w.add_section("slice_codes", a_.slice_codes);
 }
@@ -516,10 +483,10 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
                      fmt::format("{}: error {} / bound {} out of range", kName, a.error, a.bound));
   const std::size_t slices = a.slice_count_for_rows();
   a.bic_col_offsets = r.section<std::uint32_t>("bic_col_offsets");
-  a.bic_columns = read_widened(r, "bic_columns");
+  a.bic_columns = r.indices("bic_columns");
   a.bic_constants = r.section<std::int16_t>("bic_constants", a.bic_columns.size());
   a.slice_offsets = r.section<std::uint32_t>("slice_offsets", slices + 1);
-  a.slice_rows = read_widened(r, "slice_rows", slices * kSliceRows);
+  a.slice_rows = r.indices("slice_rows", slices * kSliceRows);
   a.slice_base = r.section<std::uint32_t>("slice_base", slices);
   a.slice_codes = r.section<std::uint16_t>("slice_codes");
   auto invalid = [&](const std::string& what) {
@@ -591,7 +558,7 @@ CompressorEntry registry_entry() {
   };
   e.device_params = {
       {"opencl_ids",
-       ParamType::kString,
+       ParamType::kEnum,
        "auto",
        std::nullopt,
        std::nullopt,

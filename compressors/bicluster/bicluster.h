@@ -51,8 +51,6 @@ inline constexpr std::uint32_t kZeroStride = 0x8000;
 /// by device type (compressors/bicluster/README.md has the measurements).
 enum class DeviceIds { kAuto, kU16, kU32 };
 std::string_view to_string(DeviceIds ids);
-/// Throws ParameterError for an unknown name.
-DeviceIds parse_device_ids(std::string_view text);
 
 /// The stored form (the arrays of compressors/bicluster/README.md).
 struct BiclusterArrays {

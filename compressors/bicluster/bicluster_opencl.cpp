@@ -1,11 +1,11 @@
-// The OpenCL relight of backend `bicluster` (compressors/bicluster/bicluster.cl): two launches per relight,
-// phase 1 a work-item per bicluster (plus one for the last zero slot's product), phase 2 a
+// The OpenCL relight of backend `bicluster` (compressors/bicluster/bicluster.cl): two launches per
+// relight, phase 1 a work-item per bicluster (plus one for the last zero slot's product), phase 2 a
 // work-item per slice of 4 rows.
 #include <limits>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/opencl/cl_runtime.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_runtime.h"
 
 namespace prt::bicluster {
 namespace {
@@ -72,8 +72,8 @@ class BiclusterDevice final : public DeviceRelighter {
         .set("PRT_PHASE1_PER_ITEM", kPhase1PerItem);
     const cl::Program program = build_program(ctx, "bicluster", defines);
     phase1_ = make_kernel(program, "bicluster_phase1");
-    wide_ids_ = device_ids == DeviceIds::kU32 ||
-                (device_ids == DeviceIds::kAuto && ctx.info().is_cpu);
+    wide_ids_ =
+        device_ids == DeviceIds::kU32 || (device_ids == DeviceIds::kAuto && ctx.info().is_cpu);
     phase2_ = make_kernel(program, wide_ids_ ? "bicluster_phase2_ids" : "bicluster_phase2");
     range1_ = LaunchRange::linear(biclusters_ / kPhase1PerItem + 1, kWorkGroup);
     const std::size_t products = a.product_count();
@@ -95,12 +95,8 @@ class BiclusterDevice final : public DeviceRelighter {
         make_buffer(ctx, products * sizeof(cl_float4), CL_MEM_READ_WRITE, "bicluster products");
     out_ = make_buffer(ctx, std::max<std::size_t>(rows_, 1) * sizeof(Rgb), CL_MEM_WRITE_ONLY,
                        "bicluster local radiance");
-    const std::uint64_t cb = narrow ? 2 : 4;
-    bytes_ = a.bic_col_offsets.size() * 4 + a.bic_columns.size() * cb + a.bic_constants.size() * 2 +
-             a.slice_offsets.size() * 4 + a.slice_rows.size() * 4 +
-             (wide_ids_ ? a.slice_codes.size() * 4
-                        : a.slice_base.size() * 4 + a.slice_codes.size() * 2) +
-             cols_ * sizeof(cl_float4) + products * sizeof(cl_float4) + rows_ * sizeof(Rgb);
+    bytes_ = buffer_bytes({&col_offsets_, &columns_, &constants_, &slice_offsets_, &slice_rows_,
+                           &slice_base_, &slice_codes_, &light_, &products_, &out_});
     set_args(phase1_, static_cast<cl_uint>(biclusters_), static_cast<cl_uint>(products - 1),
              col_offsets_, columns_, constants_, light_, products_);
     if (wide_ids_) {
@@ -115,15 +111,8 @@ class BiclusterDevice final : public DeviceRelighter {
   }
 
   double relight_on_device(const LightCoeffs& light) override {
-    if (light.basis != "pixel" || light.values.size() != cols_) {
-      throw ParameterError(fmt::format(
-          "{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}", kName,
-          cols_, light.basis, light.values.size()));
-    }
-    for (std::size_t k = 0; k < cols_; ++k)
-      light_host_[k] = cl_float4{{light.values[k].x, light.values[k].y, light.values[k].z, 0.f}};
-    write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
-                 "bicluster light");
+    check_pixel_light(light, cols_, kName);
+    upload_light(ctx_, light_, light.values, light_host_, "bicluster light");
     // Phase 1 always runs: it also writes the zero product of the last zero slot. The in-order
     // queue orders phase 2 after it.
     cl::Event e1 = launch(ctx_, "bicluster.phase1", phase1_, range1_);

@@ -2,9 +2,9 @@
 
 #include <bit>
 
-#include "prtlab/storage/archive.h"
-#include "prtlab/opencl/cl_device.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_device.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
 
 namespace prt::uncompressed {
@@ -12,17 +12,10 @@ namespace {
 
 class UncompressedCompressor final : public Compressor {
  public:
-
   std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
                                                Progress& progress) const override {
-    const TransferMatrix& t = input.transfer;
-    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
-        t.local_count() != input.grid.cell_count()) {
-      throw ParameterError(fmt::format(
-          "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
-          t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
-    }
-    auto out = std::make_unique<UncompressedTransfer>(t);
+    check_transfer_shape(input, kName);
+    auto out = std::make_unique<UncompressedTransfer>(input.transfer);
     progress.finish();
     return out;
   }
@@ -36,7 +29,9 @@ std::string column_type(const TransferMatrix& t) {
 
 Options options_from(const ParamSet& params) {
   Options o;
-  o.kernel = parse_variant(params.get_string("opencl_kernel"));
+  o.kernel = params.get_enum<KernelVariant>("opencl_kernel", {{"auto", KernelVariant::kAuto},
+                                                              {"rows", KernelVariant::kRows},
+                                                              {"lanes", KernelVariant::kLanes}});
   o.lanes = static_cast<int>(params.get_int("opencl_lanes"));
   // The range is checked by ParamSet; the power of two is the reduction's requirement.
   if (!std::has_single_bit(static_cast<unsigned>(o.lanes)))
@@ -44,14 +39,6 @@ Options options_from(const ParamSet& params) {
         fmt::format("{}: parameter opencl_lanes={}: must be a power of two (1, 2, 4, ..., 32)",
                     kName, o.lanes));
   return o;
-}
-
-KernelVariant parse_variant(const std::string& text) {
-  if (text == "auto") return KernelVariant::kAuto;
-  if (text == "rows") return KernelVariant::kRows;
-  if (text == "lanes") return KernelVariant::kLanes;
-  throw ParameterError(
-      fmt::format("{}: opencl_kernel '{}' is not one of auto, rows, lanes", kName, text));
 }
 
 std::string_view to_string(KernelVariant v) {
@@ -68,8 +55,9 @@ std::string_view to_string(KernelVariant v) {
 
 KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device) {
   if (requested != KernelVariant::kAuto) return requested;
-  // Measured on PoCL (compressors/uncompressed/README.md): a work-item per row matches the C++ loop,
-  // lanes cost barriers that PoCL turns into work-item loops. On GPUs, lanes give coalesced reads.
+  // Measured on PoCL (compressors/uncompressed/README.md): a work-item per row matches the C++
+  // loop, lanes cost barriers that PoCL turns into work-item loops. On GPUs, lanes give coalesced
+  // reads.
   return device.is_cpu ? KernelVariant::kRows : KernelVariant::kLanes;
 }
 
@@ -103,11 +91,7 @@ LightCoeffs UncompressedTransfer::project_light(const Cubemap& radiance) const {
 }
 
 void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
-  if (light.basis != "pixel" || light.values.size() != t_.cols()) {
-    throw ParameterError(fmt::format(
-        "{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}", kName,
-        t_.cols(), light.basis, light.values.size()));
-  }
+  check_pixel_light(light, t_.cols(), kName);
   if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() ||
       out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
     out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
@@ -145,14 +129,7 @@ std::unique_ptr<CompressedTransfer> UncompressedTransfer::load(const ArchiveRead
   const int m = r.meta_value<int>("local_count");
   const int n = r.meta_value<int>("pixel_count");
   const int s = r.meta_value<int>("supersampling");
-  std::vector<std::uint32_t> columns;
-  const SectionInfo& info = r.section_info("columns");
-  if (info.type == ElementType::kUInt16) {
-    const auto c16 = r.view<std::uint16_t>("columns");
-    columns.assign(c16.begin(), c16.end());
-  } else {
-    columns = r.section<std::uint32_t>("columns");
-  }
+  const std::vector<std::uint32_t> columns = r.indices("columns");
   try {
     TransferMatrix t =
         TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"),
@@ -171,7 +148,7 @@ CompressorEntry registry_entry() {
       "reference";
   e.device_params = {
       {"opencl_kernel",
-       ParamType::kString,
+       ParamType::kEnum,
        "auto",
        std::nullopt,
        std::nullopt,

@@ -27,7 +27,6 @@ inline constexpr std::string_view kName = "uncompressed";
 inline constexpr int kStateVersion = 2;
 
 enum class KernelVariant { kAuto, kRows, kLanes };
-KernelVariant parse_variant(const std::string& text);  ///< "auto", "rows", "lanes"
 std::string_view to_string(KernelVariant v);
 /// The variant `kAuto` resolves to on a device (rows on CPUs, lanes otherwise).
 KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device);

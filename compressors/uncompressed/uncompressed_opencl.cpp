@@ -2,8 +2,8 @@
 #include <bit>
 #include <limits>
 
-#include "prtlab/opencl/cl_runtime.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_runtime.h"
 #include "uncompressed/uncompressed.h"
 
 namespace prt::uncompressed {
@@ -56,22 +56,14 @@ class UncompressedDevice final : public DeviceRelighter {
     counts_ = upload(ctx, t.counts(), "uncompressed counts");
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "uncompressed light");
     out_ = make_buffer(ctx, rows_ * sizeof(Rgb), CL_MEM_WRITE_ONLY, "uncompressed local radiance");
-    bytes_ = (rows_ + 1) * 4 + t.nnz() * ((t.narrow_columns() ? 2 : 4) + 1) +
-             cols_ * sizeof(cl_float4) + rows_ * sizeof(Rgb);
+    bytes_ = buffer_bytes({&offsets_, &columns_, &counts_, &light_, &out_});
     set_args(kernel_, static_cast<cl_uint>(rows_), scale_, offsets_, columns_, counts_, light_,
              out_);
   }
 
   double relight_on_device(const LightCoeffs& light) override {
-    if (light.basis != "pixel" || light.values.size() != cols_) {
-      throw ParameterError(fmt::format(
-          "{}: relight needs a pixel-basis light of N = {} values, got basis '{}' with {}", kName,
-          cols_, light.basis, light.values.size()));
-    }
-    for (std::size_t k = 0; k < cols_; ++k)
-      light_host_[k] = cl_float4{{light.values[k].x, light.values[k].y, light.values[k].z, 0.f}};
-    write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
-                 "uncompressed light");
+    check_pixel_light(light, cols_, kName);
+    upload_light(ctx_, light_, light.values, light_host_, "uncompressed light");
     if (rows_ == 0) return 0.0;  // OpenCL forbids an empty launch
     cl::Event event = launch(ctx_, launch_name_, kernel_, range_);
     return event_milliseconds(event, ctx_.info().device_name, "timing of kernel " + launch_name_);

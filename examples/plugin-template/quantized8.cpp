@@ -2,8 +2,8 @@
 // build-tree) prtlab. It is the template of docs/adding-a-compressor.md: copy this folder, rename
 // the backend, replace the method. Everything a backend needs is in this one file: parameters,
 // compression, storage accounting, FLOP count, error bound, C++ relight, OpenCL relight (kernel
-// source embedded below), save/load, and the one registration line at the bottom, the same PRT_REGISTER_COMPRESSOR an
-// in-tree backend ends with.
+// source embedded below), save/load, and the one registration line at the bottom, the same
+// PRT_REGISTER_COMPRESSOR an in-tree backend ends with.
 //
 // Method. The exact transfer T stores every entry as a visibility count c in 1..s^2 with the
 // common scale 1/s^2 (transfer_matrix.h). quantized8 keeps T's sparsity (CSR; u16 column
@@ -22,11 +22,11 @@
 //   |(T' L - T L)_i| <= sum_k |v'_ik - v_ik| L_k <= rho sum_k v_ik L_k = rho (T L)_i
 // per row and channel, hence ||T' L - T L||_2 <= rho ||T L||_2: rho is the relative L2 bound
 // declared (0 when nothing was rounded), computed exactly at compression time and saved.
-#include <prtlab/storage/archive.h>
-#include <prtlab/opencl/cl_runtime.h>
+#include <prtlab/base/error.h>
 #include <prtlab/compress/compressor.h>
 #include <prtlab/compress/compressor_registry.h>
-#include <prtlab/base/error.h>
+#include <prtlab/opencl/cl_runtime.h>
+#include <prtlab/storage/archive.h>
 #include <prtlab/transfer/transfer_matrix.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -92,10 +92,7 @@ struct Arrays {
 };
 
 void check_light(const prt::LightCoeffs& light, int pixel_count) {
-  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(pixel_count))
-    throw prt::ParameterError(
-        fmt::format("{}: expected a pixel-basis light of {} values, got basis '{}' with {} values",
-                    kName, pixel_count, light.basis, light.values.size()));
+  prt::check_pixel_light(light, static_cast<std::size_t>(pixel_count), kName);
 }
 
 /// out[row] = step[row] * sum code * light[column], for rows [begin, end).
@@ -145,8 +142,7 @@ class Quantized8Device final : public prt::DeviceRelighter {
                               "quantized8 light");
     out_ = prt::make_buffer(ctx, out_host_.size() * sizeof(float), CL_MEM_WRITE_ONLY,
                             "quantized8 local radiance");
-    device_bytes_ = a.offsets.size() * 4 + a.nnz() * (a.column_bytes() + 1) + a.rows() * 4 +
-                    light_host_.size() * sizeof(cl_float4) + out_host_.size() * sizeof(float);
+    device_bytes_ = prt::buffer_bytes({&offsets_, &columns_, &codes_, &steps_, &light_, &out_});
     prt::set_args(kernel_, static_cast<cl_uint>(rows_), offsets_, columns_, codes_, steps_, light_,
                   out_);
   }
@@ -154,12 +150,7 @@ class Quantized8Device final : public prt::DeviceRelighter {
   double relight_on_device(const prt::LightCoeffs& light) override {
     check_light(light, pixel_count_);
     // RGB travels as float4 (prelude.cl): aligned loads the device can vectorise.
-    for (std::size_t k = 0; k < light_host_.size(); ++k) {
-      const prt::Rgb& v = light.values[k];
-      light_host_[k] = cl_float4{{v.r, v.g, v.b, 0.f}};
-    }
-    prt::write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
-                      "quantized8 light");
+    prt::upload_light(ctx_, light_, light.values, light_host_, "quantized8 light");
     if (rows_ == 0) return 0.0;  // OpenCL forbids an empty launch
     cl::Event done = prt::launch(ctx_, "quantized8.relight", kernel_,
                                  prt::LaunchRange::linear(rows_, kWorkGroup));
@@ -310,12 +301,8 @@ class Quantized8Compressor final : public prt::Compressor {
 
   std::unique_ptr<prt::CompressedTransfer> compress(const prt::TransferInput& input,
                                                     prt::Progress& progress) const override {
+    prt::check_transfer_shape(input, kName);
     const prt::TransferMatrix& t = input.transfer;
-    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
-        t.local_count() != input.grid.cell_count())
-      throw prt::ParameterError(fmt::format(
-          "{}: the transfer is {} x {} per vertex but the bases give M = {}, N = {}", kName,
-          t.local_count(), t.cols(), input.grid.cell_count(), input.cubemap.pixel_count()));
     Arrays a;
     a.vertices = t.vertex_count();
     a.local_count = t.local_count();

@@ -7,6 +7,7 @@
 
 #include "prtlab/storage/data_paths.h"
 #include "support/cli_runner.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -15,20 +16,15 @@ using prt::testing::run_cli;
 
 class BackendCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("prtlab_backend_cli_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    env_ = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" ";
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  void SetUp() override { env_ = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" "; }
   prt::testing::CliResult run(const std::string& args) const { return run_cli(args, dir_, env_); }
   nlohmann::json run_json(const std::string& args) const {
     const auto r = run(args);
     EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
     return nlohmann::json::parse(r.out);
   }
-  fs::path dir_;
+  prt::testing::TempDir tmp_{"backend_cli"};
+  fs::path dir_ = tmp_.path();
   std::string env_;
 };
 

@@ -33,12 +33,15 @@
 #include <set>
 
 #include "conformance/synthetic_cases.h"
-#include "prtlab/storage/archive.h"
+#include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/transfer_error.h"
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
-#include "prtlab/compress/compressor_registry.h"
-#include "prtlab/base/error.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/radiance_to_bins.h"
+#include "support/temp_dir.h"
 
 namespace prt::conformance {
 namespace {
@@ -47,20 +50,7 @@ namespace fs = std::filesystem;
 // Before main and before any OpenCL platform query: a private prtlab cache for this process,
 // PoCL's kernel cache shared by the test processes of this build (LLVM compiles each program
 // once per build, not once per test).
-const fs::path g_cache_root = [] {
-  const fs::path root =
-      fs::temp_directory_path() / ("prtlab_conformance_" + std::to_string(::getpid()));
-  fs::create_directories(root);
-  ::setenv("PRTLAB_CACHE", root.c_str(), 1);
-  ::setenv("POCL_CACHE_DIR", PRTLAB_BINARY_DIR "/test-cache/pocl", 0);
-  return root;
-}();
-struct RemoveCacheRoot {
-  ~RemoveCacheRoot() {
-    std::error_code ec;
-    fs::remove_all(g_cache_root, ec);
-  }
-} g_remove_cache_root;
+const fs::path g_cache_root = prt::testing::use_private_cache("conformance");
 
 // Tolerances. Float rounding of a sum of k positive terms is below k * 2^-24 relative; the
 // cases have rows of at most ~100 terms, so 1e-6 leaves margin without hiding a wrong term
@@ -239,6 +229,7 @@ std::vector<Params> device_param_sets(const CompressorEntry& entry) {
     std::vector<std::string> values;
     switch (spec.type) {
       case prt::ParamType::kString:
+      case prt::ParamType::kEnum:
         values = spec.choices;
         break;
       case prt::ParamType::kBool:
@@ -313,14 +304,12 @@ TEST_P(Conformance, RelightMatchesTheExactProductWithinTheDeclaredBound) {
   if (entry().lossless) {
     EXPECT_EQ(bound, 0.0) << "a lossless backend declares a bound of 0";
   }
-  if (ct.output_basis() != RadianceBasis::kPixel)
-    GTEST_SKIP() << "output basis " << to_string(ct.output_basis())
-                 << ": comparing with the pixel-basis product needs the conversion at the d_j bins";
   const double tolerance =
       bound == 0 ? kLosslessTolerance : bound * (1 + 1e-6) + kLosslessTolerance;
   for (std::size_t l = 0; l < data().lights.size(); ++l) {
     SCOPED_TRACE(::testing::Message() << "light " << l);
-    const LocalRadiance out = relight(ct, data().lights[l]);
+    // Any output basis is compared at the local bins (to_pixel_basis).
+    const LocalRadiance out = to_pixel_basis(relight(ct, data().lights[l]), data().grid);
     const LocalRadiance exact = exact_product(data(), data().lights[l]);
     ASSERT_EQ(out.basis, RadianceBasis::kPixel);
     ASSERT_EQ(out.dim, data().transfer.local_count());
@@ -336,6 +325,24 @@ TEST_P(Conformance, RelightMatchesTheExactProductWithinTheDeclaredBound) {
       for (const Rgb& v : out.values)
         ASSERT_EQ(v, Rgb(0.f)) << "an all-zero T must relight to exact zeros";
     }
+  }
+}
+
+// The measured ||T~ - T||_F / ||T||_F (every column probed, or Hutchinson's estimate on the
+// widest case): 0 up to float rounding for lossless results, and the backend's own
+// expected_frobenius_error() when it declares one.
+TEST_P(Conformance, FrobeniusErrorIsWhatTheBackendExpects) {
+  const CompressedTransfer& ct = compressed();
+  const FrobeniusError f = frobenius_error(ct, data().transfer, data().grid, 512, 16);
+  RecordProperty("frobenius", fmt::format("{:.3e}", f.relative));
+  const double slack = f.exact ? 0.0 : 4.0 * f.standard_error;
+  if (entry().lossless)
+    EXPECT_TRUE(within("Frobenius (lossless)", f.relative, kLosslessTolerance + slack));
+  if (const auto expected = ct.expected_frobenius_error()) {
+    ASSERT_TRUE(std::isfinite(*expected) && *expected >= 0) << "expected " << *expected;
+    EXPECT_NEAR(f.relative, *expected, 1e-3 * *expected + kLosslessTolerance + slack)
+        << "measured Frobenius error vs the backend's expected_frobenius_error()"
+        << (f.exact ? " (exact)" : " (estimated)");
   }
 }
 
@@ -498,7 +505,8 @@ TEST_P(ConformanceParams, RejectsEveryValueOutsideItsRange) {
       if (spec.max)
         bad.push_back(fmt::format("{}", *spec.max + std::max(1.0, std::abs(*spec.max))));
       bad.push_back("not-a-number");
-    } else if (spec.type == prt::ParamType::kString && !spec.choices.empty()) {
+    } else if ((spec.type == prt::ParamType::kString && !spec.choices.empty()) ||
+               spec.type == prt::ParamType::kEnum) {
       bad.push_back("not-one-of-the-choices");
     } else if (spec.type == prt::ParamType::kBool) {
       bad.push_back("maybe");

@@ -17,8 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "prtlab/storage/content_hash.h"
 #include "prtlab/base/error.h"
+#include "prtlab/storage/content_hash.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -148,25 +149,7 @@ TEST(Hash128, HexRoundTripAndCanonicalBytes) {
 
 // ------------------------------------------------------------------------------------ files
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / fmt::format("prtlab_archive_test_{}_{}_{}", ::getpid(),
-                                                    info->test_suite_name(), info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
+using testing::TempDir;
 
 std::vector<std::byte> read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

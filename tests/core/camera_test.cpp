@@ -11,6 +11,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/geometry/scene.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -204,11 +205,6 @@ TEST(CameraOptions, ParseHelpers) {
 
 class SceneViews : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("prtlab_camera_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path write(const std::string& name, const std::string& text) {
     const fs::path p = dir_ / name;
     std::ofstream(p) << text;
@@ -229,7 +225,8 @@ class SceneViews : public ::testing::Test {
   static constexpr const char* kPart =
       "[[part]]\nmesh = \"procedural:sphere\"\nparams = { radius = 0.5, segments = 16, rings = 8 "
       "}\n";
-  fs::path dir_;
+  prt::testing::TempDir tmp_{"camera_test"};
+  fs::path dir_ = tmp_.path();
 };
 
 TEST_F(SceneViews, ParseAndSelect) {

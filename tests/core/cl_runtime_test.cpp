@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "prtlab/base/log.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -29,20 +31,10 @@ namespace fs = std::filesystem;
 // processes of this build directory, so LLVM compiles the self-test kernels once per build
 // rather than once per test (ctest runs every test in its own process).
 const fs::path g_cache_root = [] {
-  const fs::path root =
-      fs::temp_directory_path() / ("prtlab_cl_test_" + std::to_string(::getpid()));
-  fs::create_directories(root);
-  ::setenv("PRTLAB_CACHE", root.c_str(), 1);
+  const fs::path root = prt::testing::use_private_cache("cl_test");
   ::unsetenv("PRTLAB_OPENCL_CACHE");
-  ::setenv("POCL_CACHE_DIR", PRTLAB_BINARY_DIR "/test-cache/pocl", 0);
   return root;
 }();
-struct RemoveCacheRoot {
-  ~RemoveCacheRoot() {
-    std::error_code ec;
-    fs::remove_all(g_cache_root, ec);
-  }
-} g_remove_cache_root;
 
 ClContext* test_context() {
   return default_context();
@@ -72,15 +64,25 @@ std::string read_text(const fs::path& p) {
 
 // ---- embedded kernel sources (no device needed) ----
 
+// Core's kernels/*.cl and every backend folder's *.cl (built-in and test-only: this binary
+// links both) are registered under their names with their exact bytes.
 TEST(KernelSources, EveryKernelFileIsEmbeddedByteForByte) {
-  const fs::path dir = fs::path(PRTLAB_SOURCE_DIR) / "kernels";
-  std::vector<std::string> on_disk;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".cl") on_disk.push_back(e.path().stem().string());
-  std::sort(on_disk.begin(), on_disk.end());
-  EXPECT_EQ(kernel_names(), on_disk) << "rebuild: the embedded table is stale";
-  for (const auto& name : on_disk) {
-    EXPECT_EQ(kernel_source(name), read_text(dir / (name + ".cl"))) << name;
+  const fs::path source = PRTLAB_SOURCE_DIR;
+  std::map<std::string, fs::path> on_disk;
+  auto scan = [&](const fs::path& dir) {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.is_regular_file() && e.path().extension() == ".cl")
+        on_disk[e.path().stem().string()] = e.path();
+  };
+  scan(source / "kernels");
+  for (const char* root : {"compressors", "tests/backends"})
+    for (const auto& backend : fs::directory_iterator(source / root))
+      if (backend.is_directory()) scan(backend.path());
+  std::vector<std::string> names;
+  for (const auto& [name, path] : on_disk) names.push_back(name);
+  EXPECT_EQ(kernel_names(), names) << "rebuild: the embedded table is stale";
+  for (const auto& [name, path] : on_disk) {
+    EXPECT_EQ(kernel_source(name), read_text(path)) << name;
     EXPECT_EQ(kernel_source(name + ".cl"), kernel_source(name));
   }
   EXPECT_NE(kernel_source("selftest").find("reduce_sum"), std::string_view::npos);

@@ -11,20 +11,14 @@
 #include <vector>
 
 #include "prtlab/base/error.h"
+#include "support/random_directions.h"
 
 namespace prt {
 namespace {
 
 constexpr std::uint64_t kSeed = 20240601;
 
-Vec3d random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  for (;;) {
-    const Vec3d v{g(rng), g(rng), g(rng)};
-    const double len = glm::length(v);
-    if (len > 1e-6) return v / len;
-  }
-}
+using testing::random_direction;
 
 double angle_between(const Vec3d& a, const Vec3d& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));

@@ -10,8 +10,9 @@
 #include <cmath>
 
 #include "prtlab/btf/btf_materials.h"
-#include "prtlab/opencl/cl_context.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/transfer/radiance_to_bins.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
@@ -31,7 +32,7 @@ double max_error_vs_image_max(const RgbImage& a, const RgbImage& b) {
 struct Fixture {
   Scene scene =
       load_scene(std::filesystem::path(PRTLAB_SOURCE_DIR) / "scenes/tiny-sphere-plane.toml");
-  std::shared_ptr<const CompressedTransfer> transfer;
+  std::shared_ptr<const CompressedTransfer> transfer, sh_transfer;
   ShadingMaterials materials;
   Camera front, top;
   Cubemap sky = SunSky{}.to_cubemap(8, 2);
@@ -55,6 +56,11 @@ struct Fixture {
     transfer = CompressorRegistry::instance()
                    .create("uncompressed", {})
                    ->compress({t, nullptr, layout, grid}, Progress::null());
+    // Relights into SH of order 4: 16 coefficients for M = 16 cells, so nothing is lost, but
+    // every frame goes through the conversion to the bins.
+    sh_transfer = CompressorRegistry::instance()
+                      .create("sh_probe", {{"order", "4"}})
+                      ->compress({t, nullptr, layout, grid}, Progress::null());
     BtfParams p;
     p.resolution = 8;
     p.view_side = 6;
@@ -135,6 +141,28 @@ TEST_P(FrameLoop, LightChangeRelightsAndMatchesAFreshRender) {
   const RgbImage after = r.image();
   EXPECT_LE(max_error_vs_image_max(after, f.fresh(device(), f.front, f.sky2)), 1e-6);
   EXPECT_GT(max_error_vs_image_max(after, before), 0.05) << "the light did change";
+}
+
+// A backend whose relight is SH renders, on both paths, the image of the independent
+// composition: its C++ relight, to_pixel_basis, the reference shader. The first light change
+// sizes the device converter, the second takes its steady path.
+TEST_P(FrameLoop, AnShOutputBackendRendersThroughTheBins) {
+  const auto& f = fixture();
+  ASSERT_EQ(f.sh_transfer->output_basis(), RadianceBasis::kSphericalHarmonics);
+  FrameRenderer r(f.scene.mesh, f.materials, f.sh_transfer, device() ? default_context() : nullptr);
+  r.set_camera(f.front);
+  for (const Cubemap* env : {&f.sky, &f.sky2}) {
+    r.set_environment(*env);
+    r.render();
+    LocalRadiance sh;
+    f.sh_transfer->relight(f.sh_transfer->project_light(*env), sh);
+    const LocalRadiance pixel = to_pixel_basis(sh, HemisphereGrid(f.scene.desc.local_grid));
+    const RgbImage expected =
+        shade_frame_reference(r.gbuffer(), f.scene.mesh, f.materials, pixel, env);
+    EXPECT_LT(max_error_vs_image_max(r.image(), expected), 1e-4);
+    EXPECT_EQ(r.radiance().basis, RadianceBasis::kPixel);
+    EXPECT_LT(relative_l2_error(r.radiance(), pixel), 1e-5);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Paths, FrameLoop, ::testing::Values(false, true),

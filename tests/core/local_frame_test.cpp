@@ -8,19 +8,14 @@
 #include <random>
 #include <vector>
 
+#include "support/random_directions.h"
+
 namespace prt {
 namespace {
 
 constexpr std::uint64_t kSeed = 4242;
 
-Vec3d random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  for (;;) {
-    const Vec3d v{g(rng), g(rng), g(rng)};
-    const double len = glm::length(v);
-    if (len > 1e-6) return v / len;
-  }
-}
+using testing::random_direction;
 
 // Largest deviation from an orthonormal right-handed frame with the given normal.
 double frame_error(const LocalFrame& f, const Vec3d& unit_normal) {

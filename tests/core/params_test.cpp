@@ -33,6 +33,39 @@ TEST(Params, DefaultsAndGivenValues) {
   EXPECT_EQ(p.canonical().at("lossy"), "false");
 }
 
+enum class Mode { kStatic, kIterative, kAdaptive };
+
+TEST(Params, EnumValuesMapToTheirEnumeratorsAndOthersAreRefused) {
+  const std::vector<ParamSpec> specs = {
+      {"mode", ParamType::kEnum, "static", {}, {}, {"static", "iterative", "adaptive"}, "variant"}};
+  auto read = [&](const std::map<std::string, std::string>& given) {
+    return ParamSet("cpca", specs, given)
+        .get_enum<Mode>("mode", {{"static", Mode::kStatic},
+                                 {"iterative", Mode::kIterative},
+                                 {"adaptive", Mode::kAdaptive}});
+  };
+  EXPECT_EQ(read({}), Mode::kStatic);
+  EXPECT_EQ(read({{"mode", "adaptive"}}), Mode::kAdaptive);
+  EXPECT_EQ(ParamSet("cpca", specs, {{"mode", "iterative"}}).get_string("mode"), "iterative");
+  EXPECT_THROW(read({{"mode", "dynamic"}}), ParameterError);
+  // A reader that forgets a choice is a bug of the reader, reported as such.
+  EXPECT_THROW(ParamSet("cpca", specs, {{"mode", "adaptive"}})
+                   .get_enum<Mode>("mode", {{"static", Mode::kStatic}}),
+               Error);
+  // An enum without choices is refused when the set is built.
+  const std::vector<ParamSpec> empty = {{"mode", ParamType::kEnum, "x", {}, {}, {}, "variant"}};
+  EXPECT_ANY_THROW(ParamSet("cpca", empty, {}));
+  EXPECT_EQ(to_string(ParamType::kEnum), "enum");
+}
+
+TEST(Params, DeviceOptionsLeaveOutTheSharedParameters) {
+  const std::vector<ParamSpec> specs = {
+      {"opencl_x", ParamType::kEnum, "a", {}, {}, {"a", "b"}, "variant"}};
+  EXPECT_NO_THROW(ParamSet("b", specs, {{"seed", "2"}}));
+  EXPECT_THROW(ParamSet("b", specs, {{"seed", "2"}}, ParamSet::Shared::kExclude), ParameterError);
+  EXPECT_EQ(ParamSet("b", specs, {}, ParamSet::Shared::kExclude).canonical().size(), 1u);
+}
+
 TEST(Params, UnknownKeyListsValidOnes) {
   try {
     ParamSet p("cpca", kSpecs, {{"clusterz", "3"}});

@@ -13,10 +13,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "prtlab/storage/archive.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -39,21 +40,7 @@ std::vector<std::string> backend_folders() {
 }
 const std::vector<std::string> kBuiltinBackends = backend_folders();
 
-class ScratchDir {
- public:
-  ScratchDir()
-      : path_(fs::temp_directory_path() / ("prtlab_registry_test_" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using ScratchDir = testing::TempDir;
 
 std::string message_of(const std::function<void()>& f) {
   try {

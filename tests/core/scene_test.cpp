@@ -6,8 +6,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/error.h"
+#include "prtlab/storage/data_paths.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -15,11 +16,6 @@ namespace fs = std::filesystem;
 
 class SceneFile : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("prtlab_scene_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path write(const std::string& name, const std::string& text) {
     const fs::path p = dir_ / name;
     std::ofstream(p) << text;
@@ -37,7 +33,8 @@ class SceneFile : public ::testing::Test {
       EXPECT_NE(msg.find(needle), std::string::npos) << "expected '" << needle << "' in: " << msg;
     }
   }
-  fs::path dir_;
+  prt::testing::TempDir tmp_{"scene_test"};
+  fs::path dir_ = tmp_.path();
 };
 
 constexpr const char* kValid = R"(

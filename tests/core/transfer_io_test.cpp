@@ -10,6 +10,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "prtlab/transfer/scene_transfer.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -17,12 +18,8 @@ namespace fs = std::filesystem;
 
 class TransferFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("prtlab_transfer_io_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  prt::testing::TempDir tmp_{"transfer_io"};
+  fs::path dir_ = tmp_.path();
 };
 
 TransferResult sample_result(bool with_sh) {

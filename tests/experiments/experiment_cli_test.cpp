@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli_runner.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -14,14 +15,9 @@ using prt::testing::run_cli;
 
 class ExperimentCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("prtlab_experiment_cli_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    env_ = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" ";
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  void SetUp() override { env_ = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" "; }
+  prt::testing::TempDir tmp_{"experiment_cli"};
+  fs::path dir_ = tmp_.path();
   std::string env_;
 };
 

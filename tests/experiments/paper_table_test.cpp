@@ -14,8 +14,9 @@
 
 #include "lossless_check.h"
 #include "paper_numbers.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "table_report.h"
@@ -156,11 +157,18 @@ TEST_F(PaperTableTiny, LosslessCheckCoversEveryColumn) {
   EXPECT_TRUE(c.probe_applicable);
   EXPECT_EQ(c.probe_weight_base, 5);  // s = 2: counts 0..4 are base-5 digits
   EXPECT_EQ(c.columns_per_probe, 15);
-  EXPECT_EQ(c.probes, (384u + 14) / 15);
+  EXPECT_EQ(c.cpp.probes, (384u + 14) / 15);
   const std::size_t rows = result_->rows[0].vertices * 16;
-  EXPECT_EQ(c.probe_values, c.probes * rows * 3);
-  EXPECT_EQ(c.mismatches, 0u);
-  EXPECT_LT(c.random_max_rel_error, kFloatRoundingBound);
+  EXPECT_EQ(c.cpp.probe_values, c.cpp.probes * rows * 3);
+  EXPECT_EQ(c.cpp.mismatches, 0u);
+  EXPECT_LT(c.cpp.random_max_rel_error, kFloatRoundingBound);
+  // The table's run has an OpenCL device where the machine has one: the device relight is
+  // probed the same way.
+  if (c.opencl) {
+    EXPECT_EQ(c.opencl->probes, c.cpp.probes);
+    EXPECT_EQ(c.opencl->mismatches, 0u);
+    EXPECT_LT(c.opencl->random_max_rel_error, kFloatRoundingBound);
+  }
 }
 
 TEST_F(PaperTableTiny, ProvenanceIsRecordedEverywhere) {
@@ -276,12 +284,46 @@ class PerturbedTransfer final : public CompressedTransfer {
     out = relight_exact(t_, light.values);
     for (auto& v : out.values) v *= scale_;
   }
-  std::unique_ptr<DeviceRelighter> upload(ClContext&) const override { return nullptr; }
+  std::unique_ptr<DeviceRelighter> upload(ClContext&, const ParamSet&) const override {
+    return nullptr;
+  }
   void save(ArchiveWriter&) const override {}
 
  private:
   TransferMatrix t_;
   float scale_;
+};
+
+// Exact in C++, but its device relight is the exact product of another matrix: a kernel bug
+// that only the OpenCL probes can see. backend() names the uncompressed backend, whose device
+// options upload_compressed validates.
+class WrongOnTheDevice final : public CompressedTransfer {
+ public:
+  WrongOnTheDevice(TransferMatrix t, TransferMatrix on_device)
+      : t_(std::move(t)),
+        device_(CompressorRegistry::instance()
+                    .create("uncompressed", {})
+                    ->compress({on_device, nullptr, layout_, grid_}, Progress::null())) {}
+  std::string backend() const override { return "uncompressed"; }
+  StorageReport storage() const override { return {}; }
+  double flops_per_relight() const override { return 2.0 * static_cast<double>(t_.nnz()); }
+  double declared_error_bound() const override { return 0.0; }
+  LightCoeffs project_light(const Cubemap& radiance) const override {
+    return {"pixel", radiance.light_vector()};
+  }
+  void relight(const LightCoeffs& light, LocalRadiance& out) const override {
+    out = relight_exact(t_, light.values);
+  }
+  std::unique_ptr<DeviceRelighter> upload(ClContext& ctx, const ParamSet& o) const override {
+    return device_->upload(ctx, o);
+  }
+  void save(ArchiveWriter&) const override {}
+
+ private:
+  TransferMatrix t_;
+  CubemapLayout layout_{RandomTransferSpec{}.resolution};
+  HemisphereGrid grid_{RandomTransferSpec{}.grid_side};
+  std::unique_ptr<CompressedTransfer> device_;
 };
 
 TransferMatrix with_count_changed(const TransferMatrix& t, std::size_t entry) {
@@ -302,21 +344,22 @@ TEST(LosslessCheck, CatchesOneWrongCountAndToleratesFloatRounding) {
   const PerturbedTransfer exact(t, 1.0f);
   const auto ok = check_lossless(exact, t, spec.resolution);
   EXPECT_TRUE(ok.exact()) << ok.verdict();
-  EXPECT_EQ(ok.max_count_error, 0.0);
+  EXPECT_EQ(ok.cpp.max_count_error, 0.0);
+  EXPECT_FALSE(ok.opencl.has_value()) << "no context given: C++ only";
 
   const PerturbedTransfer rounded(t, 1.0f + 4e-7f);  // a few float ulps on every value
   const auto near = check_lossless(rounded, t, spec.resolution);
   EXPECT_TRUE(near.exact()) << near.verdict();
-  EXPECT_GT(near.random_max_rel_error, 0.0);
+  EXPECT_GT(near.cpp.random_max_rel_error, 0.0);
 
   const PerturbedTransfer wrong(with_count_changed(t, t.nnz() / 2), 1.0f);
   const auto bad = check_lossless(wrong, t, spec.resolution);
   EXPECT_FALSE(bad.exact());
-  EXPECT_EQ(bad.mismatches, 1u);  // one entry: one row, one channel of one probe
+  EXPECT_EQ(bad.cpp.mismatches, 1u);  // one entry: one row, one channel of one probe
   // A count off by one at digit i of a probe shows as (s^2 + 1)^i = 5^i code units.
-  const double digit = std::log(bad.max_count_error) / std::log(5.0);
-  EXPECT_NEAR(digit, std::round(digit), 1e-9) << bad.max_count_error;
-  EXPECT_GT(bad.random_max_rel_error, kFloatRoundingBound);
+  const double digit = std::log(bad.cpp.max_count_error) / std::log(5.0);
+  EXPECT_NEAR(digit, std::round(digit), 1e-9) << bad.cpp.max_count_error;
+  EXPECT_GT(bad.cpp.random_max_rel_error, kFloatRoundingBound);
   EXPECT_NE(bad.verdict().find("NOT exact"), std::string::npos);
 }
 
@@ -329,9 +372,27 @@ TEST(LosslessCheck, BiclusterBackendIsExactOnARandomTransfer) {
   const TransferInput input{t, nullptr, layout, grid};
   const auto ct =
       CompressorRegistry::instance().create(kTableBackend, {})->compress(input, Progress::null());
-  const auto c = check_lossless(*ct, t, spec.resolution);
+  const auto c = check_lossless(*ct, t, spec.resolution, {.device = default_context()});
   EXPECT_TRUE(c.exact()) << c.verdict();
-  EXPECT_EQ(c.mismatches, 0u);
+  EXPECT_EQ(c.cpp.mismatches, 0u);
+  if (c.opencl) EXPECT_EQ(c.opencl->mismatches, 0u);
+}
+
+TEST(LosslessCheck, ProbesTheOpenClRelightToo) {
+  ClContext* ctx = default_context();
+  if (!ctx) GTEST_SKIP() << "no OpenCL device: the device probes cannot run here";
+  RandomTransferSpec spec;
+  const TransferMatrix t = random_transfer(7, spec);
+  const WrongOnTheDevice ct(t, with_count_changed(t, t.nnz() / 3));
+  const auto cpp_only = check_lossless(ct, t, spec.resolution);
+  EXPECT_TRUE(cpp_only.exact()) << "the C++ path is exact: " << cpp_only.verdict();
+  const auto c = check_lossless(ct, t, spec.resolution, {.device = ctx});
+  ASSERT_TRUE(c.opencl.has_value());
+  EXPECT_FALSE(c.exact());
+  EXPECT_EQ(c.cpp.mismatches, 0u);
+  EXPECT_EQ(c.opencl->mismatches, 1u);
+  EXPECT_NE(c.verdict().find("OpenCL"), std::string::npos) << c.verdict();
+  EXPECT_EQ(c.device, ctx->info().label());
 }
 
 }  // namespace

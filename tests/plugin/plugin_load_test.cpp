@@ -18,10 +18,11 @@
 #include <string>
 
 #include "conformance/synthetic_cases.h"
-#include "prtlab/opencl/cl_context.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/exact_relight.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -34,20 +35,7 @@ const fs::path kNotAPlugin = PRTLAB_NOT_A_PLUGIN;
 
 // Before any OpenCL platform query: a private prtlab cache for this process, PoCL's kernel
 // cache shared by the test processes of this build (as in the conformance suite).
-const fs::path g_scratch = [] {
-  const fs::path root =
-      fs::temp_directory_path() / ("prtlab_plugin_test_" + std::to_string(::getpid()));
-  fs::create_directories(root);
-  ::setenv("PRTLAB_CACHE", root.c_str(), 1);
-  ::setenv("POCL_CACHE_DIR", PRTLAB_BINARY_DIR "/test-cache/pocl", 0);
-  return root;
-}();
-struct RemoveScratch {
-  ~RemoveScratch() {
-    std::error_code ec;
-    fs::remove_all(g_scratch, ec);
-  }
-} g_remove_scratch;
+const fs::path g_scratch = prt::testing::use_private_cache("plugin_test");
 
 /// Loads the template once per process (a second load is an error, tested below).
 const std::vector<std::string>& load_template() {

@@ -25,14 +25,15 @@
 
 #include "bicluster/bicluster.h"
 #include "bicluster/bicluster_budget.h"
+#include "prtlab/base/statistics.h"
 #include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/geometry/scene.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/storage/data_paths.h"
-#include "prtlab/transfer/exact_relight.h"
-#include "prtlab/geometry/scene.h"
-#include "prtlab/transfer/scene_transfer.h"
 #include "prtlab/storage/stage_cache.h"
+#include "prtlab/transfer/exact_relight.h"
+#include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::bicluster {
 namespace {
@@ -239,11 +240,6 @@ TEST(BiclusterMeasure, DISABLED_GatherLocality) {
   }
 }
 
-double median_ms(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
 void relight_timing();
 
 // Reuse of P's lines in phase 2 under row orders (compressors/bicluster/README.md, "Row order"): an
@@ -357,7 +353,7 @@ void relight_timing() {
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
-    std::printf("uncompressed C++ %.3f ms\n", median_ms(ms));
+    std::printf("uncompressed C++ %.3f ms\n", median(ms));
   }
   auto run = [&](const char* name, const Biclustering& order) {
     const BiclusterTransfer ct(pack(order, t));
@@ -389,9 +385,9 @@ void relight_timing() {
       auto device = upload_compressed(ct, *ctx);
       std::vector<double> kms;
       for (int i = 0; i < reps; ++i) kms.push_back(device->relight_on_device(coeffs));
-      dev = median_ms(kms);
+      dev = median(kms);
     }
-    std::printf("%-14s C++ %.3f ms (rel. L2 %.2e), OpenCL %.3f ms\n", name, median_ms(ms),
+    std::printf("%-14s C++ %.3f ms (rel. L2 %.2e), OpenCL %.3f ms\n", name, median(ms),
                 std::sqrt(d2 / n2), dev);
     std::fflush(stdout);
   };

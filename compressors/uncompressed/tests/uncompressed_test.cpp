@@ -4,18 +4,17 @@
 #include "uncompressed/uncompressed.h"
 
 #include <gtest/gtest.h>
-
-#include <fstream>
-#include <iterator>
 #include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
-#include "prtlab/storage/archive.h"
-#include "prtlab/opencl/cl_device.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_device.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
 
 namespace prt::uncompressed {
@@ -86,17 +85,17 @@ TEST(Uncompressed, LightIsThePixelLightVectorAndRelightIsTheExactProduct) {
 }
 
 TEST(Uncompressed, LanesMustBeAPowerOfTwo) {
-  EXPECT_NE(CompressorRegistry::instance().create("uncompressed", {{"opencl_lanes", "16"}}),
-            nullptr);
+  const auto& registry = CompressorRegistry::instance();
+  EXPECT_EQ(options_from(registry.device_options("uncompressed", {{"opencl_lanes", "16"}})).lanes,
+            16);
   try {
-    CompressorRegistry::instance().create("uncompressed", {{"opencl_lanes", "12"}});
+    options_from(registry.device_options("uncompressed", {{"opencl_lanes", "12"}}));
     FAIL() << "accepted 12 lanes";
   } catch (const ParameterError& e) {
     EXPECT_NE(std::string(e.what()).find("power of two"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(
-      CompressorRegistry::instance().create("uncompressed", {{"opencl_kernel", "columns"}}),
-      ParameterError);
+  EXPECT_THROW(registry.device_options("uncompressed", {{"opencl_kernel", "columns"}}),
+               ParameterError);
 }
 
 TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
@@ -107,8 +106,12 @@ TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
   EXPECT_EQ(resolve_variant(KernelVariant::kAuto, gpu), KernelVariant::kLanes);
   EXPECT_EQ(resolve_variant(KernelVariant::kLanes, cpu), KernelVariant::kLanes);
   EXPECT_EQ(resolve_variant(KernelVariant::kRows, gpu), KernelVariant::kRows);
+  const auto& registry = CompressorRegistry::instance();
   for (auto v : {KernelVariant::kAuto, KernelVariant::kRows, KernelVariant::kLanes})
-    EXPECT_EQ(parse_variant(std::string(to_string(v))), v);
+    EXPECT_EQ(options_from(registry.device_options("uncompressed",
+                                                   {{"opencl_kernel", std::string(to_string(v))}}))
+                  .kernel,
+              v);
 }
 
 // Kernel variants are device options: not compression parameters, not saved, validated on
@@ -116,13 +119,11 @@ TEST(Uncompressed, AutoPicksRowsOnCpusAndLanesOnGpus) {
 TEST(Uncompressed, KernelVariantsAreDeviceOptionsNotParameters) {
   EXPECT_THROW(compress(small_transfer(), {{"opencl_kernel", "lanes"}}), ParameterError);
   const auto& registry = CompressorRegistry::instance();
-  const Options o =
-      options_from(registry.device_options("uncompressed", {{"opencl_kernel", "lanes"},
-                                                            {"opencl_lanes", "4"}}));
+  const Options o = options_from(
+      registry.device_options("uncompressed", {{"opencl_kernel", "lanes"}, {"opencl_lanes", "4"}}));
   EXPECT_EQ(o.kernel, KernelVariant::kLanes);
   EXPECT_EQ(o.lanes, 4);
-  EXPECT_EQ(options_from(registry.device_options("uncompressed", {})).kernel,
-            KernelVariant::kAuto);
+  EXPECT_EQ(options_from(registry.device_options("uncompressed", {})).kernel, KernelVariant::kAuto);
   EXPECT_THROW(registry.device_options("uncompressed", {{"opencl_lanes", "64"}}), ParameterError);
   EXPECT_THROW(options_from(registry.device_options("uncompressed", {{"opencl_lanes", "3"}})),
                ParameterError);

@@ -5,21 +5,18 @@
 #include <cmath>
 #include <filesystem>
 
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/base/statistics.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/lighting/environment_map.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/data_paths.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/base/error.h"
 #include "prtlab/transfer/exact_relight.h"
-#include "prtlab/base/log.h"
+#include "prtlab/transfer/radiance_to_bins.h"
 
 namespace prt {
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 LocalRadiance exact_double(const TransferMatrix& t, const Cubemap& radiance) {
   const auto d = relight_exact_double(t, radiance.light_vector());
@@ -63,22 +60,27 @@ std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
 
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
-                                   int repeats,
-                                   const std::map<std::string, std::string>& device_options) {
+                                   const EvaluationOptions& options) {
   BackendEvaluation ev;
   PRT_CHECK(!lights.empty(), "no evaluation lights");
-  if (ct.output_basis() != RadianceBasis::kPixel)
-    throw Error(fmt::format(
-        "backend '{}' produces {} radiance; evaluation against the pixel-basis product needs a "
-        "conversion to the local cells (not available yet)",
-        ct.backend(), to_string(ct.output_basis())));
+  const int repeats = options.repeats;
+  const HemisphereGrid grid(static_cast<int>(std::lround(std::sqrt(exact.local_count()))));
   LocalRadiance out;
   for (const auto& light : lights) {
     const LightCoeffs coeffs = ct.project_light(light.radiance);
     ct.relight(coeffs, out);
+    const LocalRadiance pixel = to_pixel_basis(out, grid);
     const LocalRadiance ref = exact_double(exact, light.radiance);
-    ev.errors.push_back({light.name, relative_l2_error(out, ref), max_relative_error(out, ref)});
+    ev.errors.push_back(
+        {light.name, relative_l2_error(pixel, ref), max_relative_error(pixel, ref)});
+    const VertexError v = max_vertex_error(pixel, ref, grid);
+    if (v.max_relative >= ev.max_vertex_rel) {
+      ev.max_vertex_rel = v.max_relative;
+      ev.worst_vertex = v.worst_vertex;
+    }
   }
+  ev.frobenius = frobenius_error(ct, exact, grid, options.frobenius_relights,
+                                 options.frobenius_relights, options.seed);
   for (const auto& e : ev.errors) {
     ev.mean_rel_l2 += e.rel_l2 / static_cast<double>(ev.errors.size());
     ev.max_rel_l2 = std::max(ev.max_rel_l2, e.rel_l2);
@@ -101,7 +103,7 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
   ev.device = "none";
   if (context) {
     ev.device = context->info().label();
-    auto dev = upload_compressed(ct, *context, device_options);
+    auto dev = upload_compressed(ct, *context, options.device_options);
     if (dev) {
       LocalRadiance gpu;
       dev->relight(coeffs, gpu);

@@ -2,9 +2,9 @@
 
 #include <numeric>
 
-#include "prtlab/storage/archive.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/storage/archive.h"
 
 namespace prt {
 namespace {
@@ -19,11 +19,6 @@ std::string known_names(const CompressorRegistry& r) {
 }
 
 }  // namespace
-
-std::uint64_t StorageReport::total_bytes() const {
-  return std::accumulate(components.begin(), components.end(), std::uint64_t{0},
-                         [](std::uint64_t s, const StorageComponent& c) { return s + c.bytes; });
-}
 
 CompressorRegistry& CompressorRegistry::instance() {
   static CompressorRegistry registry;
@@ -47,9 +42,10 @@ void CompressorRegistry::add(CompressorEntry entry) {
   for (const auto& d : entry.device_params)
     for (const auto& p : entry.params)
       if (d.key == p.key)
-        throw Error(fmt::format("compressor registry: '{}' declares '{}' both as a parameter and "
-                                "as a device option",
-                                entry.name, d.key));
+        throw Error(
+            fmt::format("compressor registry: '{}' declares '{}' both as a parameter and "
+                        "as a device option",
+                        entry.name, d.key));
   auto name = entry.name;
   entries_.emplace(std::move(name), std::move(entry));
 }
@@ -77,8 +73,7 @@ std::unique_ptr<Compressor> CompressorRegistry::create(
 ParamSet CompressorRegistry::device_options(
     const std::string& name, const std::map<std::string, std::string>& options) const {
   const auto& e = get(name);
-  return ParamSet(name + " (device options)", e.device_params, options,
-                  ParamSet::Shared::kExclude);
+  return ParamSet(name + " (device options)", e.device_params, options, ParamSet::Shared::kExclude);
 }
 
 std::unique_ptr<DeviceRelighter> upload_compressed(
@@ -91,19 +86,18 @@ std::unique_ptr<DeviceRelighter> upload_compressed(
 namespace detail {
 
 void register_compressor_static(CompressorEntry (*make)(), int api) noexcept {
-  register_static({.api = api,
-                   .kind = "compressor",
-                   .add =
-                       [make](const std::string& origin) {
-                         CompressorEntry e = make();
-                         e.origin = origin;
-                         std::string name = e.name;
-                         CompressorRegistry::instance().add(std::move(e));
-                         return name;
-                       },
-                   .remove = [](const std::string& name) {
-                     CompressorRegistry::instance().remove(name);
-                   }});
+  register_static(
+      {.api = api,
+       .kind = "compressor",
+       .add =
+           [make](const std::string& origin) {
+             CompressorEntry e = make();
+             e.origin = origin;
+             std::string name = e.name;
+             CompressorRegistry::instance().add(std::move(e));
+             return name;
+           },
+       .remove = [](const std::string& name) { CompressorRegistry::instance().remove(name); }});
 }
 
 }  // namespace detail

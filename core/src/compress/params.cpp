@@ -59,7 +59,8 @@ ParamSet::Value parse_value(const std::string& owner, const ParamSpec& spec,
       if (text == "false" || text == "0" || text == "off" || text == "no") return false;
       return fail("not a boolean (true/false)");
     case ParamType::kString:
-      if (!spec.choices.empty() &&
+    case ParamType::kEnum:
+      if ((!spec.choices.empty() || spec.type == ParamType::kEnum) &&
           std::find(spec.choices.begin(), spec.choices.end(), text) == spec.choices.end())
         return fail("not one of the allowed values");
       return text;
@@ -93,6 +94,8 @@ std::string_view to_string(ParamType t) {
       return "bool";
     case ParamType::kString:
       return "string";
+    case ParamType::kEnum:
+      return "enum";
   }
   return "?";
 }
@@ -118,6 +121,8 @@ ParamSet::ParamSet(std::string owner, std::span<const ParamSpec> specs,
     for (const auto& s : shared_param_specs()) all.push_back(s);
   for (const auto& s : all) {
     PRT_CHECK(!types_.contains(s.key), "duplicate parameter '{}' in {}", s.key, owner_);
+    PRT_CHECK(s.type != ParamType::kEnum || !s.choices.empty(),
+              "enum parameter '{}' of {} lists no choices", s.key, owner_);
     types_[s.key] = s.type;
     values_[s.key] = parse_value(owner_ + " (default)", s, s.default_value);
   }
@@ -149,7 +154,19 @@ bool ParamSet::get_bool(const std::string& key) const {
   return std::get<bool>(get(key, ParamType::kBool));
 }
 const std::string& ParamSet::get_string(const std::string& key) const {
+  const auto it = types_.find(key);
+  if (it != types_.end() && it->second == ParamType::kEnum) return get_enum_name(key);
   return std::get<std::string>(get(key, ParamType::kString));
+}
+
+const std::string& ParamSet::get_enum_name(const std::string& key) const {
+  return std::get<std::string>(get(key, ParamType::kEnum));
+}
+
+void ParamSet::enum_not_mapped(const std::string& key, const std::string& value) const {
+  throw Error(
+      fmt::format("{}: enum parameter '{}' has the value '{}', which its reader does not map",
+                  owner_, key, value));
 }
 
 std::map<std::string, std::string> ParamSet::canonical() const {

@@ -45,4 +45,20 @@ void read_buffer(ClContext& ctx, const cl::Buffer& buffer, void* data, std::size
   }
 }
 
+void upload_light(ClContext& ctx, const cl::Buffer& buffer, std::span<const Rgb> light,
+                  std::vector<cl_float4>& scratch, std::string_view what) {
+  scratch.resize(light.size());
+  for (std::size_t k = 0; k < light.size(); ++k)
+    scratch[k] = cl_float4{{light[k].x, light[k].y, light[k].z, 0.f}};
+  if (!scratch.empty())
+    write_buffer(ctx, buffer, scratch.data(), scratch.size() * sizeof(cl_float4), what);
+}
+
+std::uint64_t buffer_bytes(std::initializer_list<const cl::Buffer*> buffers) {
+  std::uint64_t bytes = 0;
+  for (const cl::Buffer* b : buffers)
+    if (b && (*b)() != nullptr) bytes += b->getInfo<CL_MEM_SIZE>();
+  return bytes;
+}
+
 }  // namespace prt

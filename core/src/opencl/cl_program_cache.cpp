@@ -9,10 +9,11 @@
 #include <fstream>
 #include <vector>
 
-#include "prtlab/storage/atomic_file.h"
-#include "prtlab/opencl/cl_error.h"
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/opencl/cl_error.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -68,10 +69,6 @@ std::string check_file(std::span<const std::byte> file, const Hash128& key,
   std::memcpy(stored_sum.data(), file.data() + 40, 16);
   if (Hash128::from_canonical_bytes(stored_sum) != hash_bytes(payload)) return "checksum mismatch";
   return {};
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace

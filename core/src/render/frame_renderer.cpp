@@ -4,19 +4,19 @@
 #include <cmath>
 #include <map>
 
+#include "prtlab/base/error.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/btf/scene_btfs.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
-#include "prtlab/base/error.h"
+#include "prtlab/render/device_radiance_to_bins.h"
+#include "prtlab/transfer/radiance_to_bins.h"
 
 namespace prt {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 }  // namespace
 
@@ -29,6 +29,11 @@ struct FrameRenderer::Impl {
   GBufferTracer tracer;
   std::unique_ptr<DeviceRelighter> relighter;
   std::optional<DeviceBtfShader> shader;
+  // A backend relighting into another basis (SH) is converted to the bins: on the device by
+  // to_bins (made at the first light change, when the relight's dimension is known), in C++ by
+  // to_pixel_basis.
+  std::optional<HemisphereGrid> grid;
+  std::optional<DeviceRadianceToBins> to_bins;
 
   GBuffer gbuffer;
   // On the device path L* stays on the device (the shader reads the relighter's output buffer)
@@ -59,11 +64,6 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                              const ShadingOptions& options,
                              const std::map<std::string, std::string>& device_options) {
   if (!transfer) throw ParameterError("frame renderer: no compressed transfer given");
-  if (transfer->output_basis() != RadianceBasis::kPixel)
-    throw ParameterError(
-        fmt::format("frame renderer: backend '{}' relights into the {} basis; BTF "
-                    "shading needs the pixel basis",
-                    transfer->backend(), to_string(transfer->output_basis())));
   if (materials.part_btf.empty() || !materials.part_btf.front())
     throw ParameterError("frame renderer: no materials given");
   validate_materials(materials, mesh, materials.part_btf.front()->light_count());
@@ -71,6 +71,10 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                                  context, options);
   Impl& s = *impl_;
   s.local_count = s.materials.part_btf.front()->light_count();
+  const int side = static_cast<int>(std::lround(std::sqrt(s.local_count)));
+  if (side * side != s.local_count)
+    throw ParameterError(fmt::format("frame renderer: M = {} is no square grid", s.local_count));
+  s.grid.emplace(side);
   if (context) {
     s.relighter = upload_compressed(*s.transfer, *context, device_options);
     if (!s.relighter)
@@ -80,7 +84,8 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                       s.transfer->backend()));
     s.shader.emplace(*context, s.mesh, s.materials, nullptr, options);
     // Checks the buffer's size against the mesh before the first frame.
-    s.shader->set_radiance_buffer(s.relighter->output_buffer());
+    if (s.transfer->output_basis() == RadianceBasis::kPixel)
+      s.shader->set_radiance_buffer(s.relighter->output_buffer());
   }
 }
 
@@ -108,15 +113,31 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
   const LightCoeffs light = s.transfer->project_light(environment);
   s.pending.project_ms += ms_since(t0);
   t0 = Clock::now();
-  if (s.relighter) {
+  if (s.relighter && s.transfer->output_basis() == RadianceBasis::kPixel) {
     // The shader reads L* where the relight left it: no read-back, no upload.
     s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
     s.radiance_on_host = false;
+  } else if (s.relighter) {
+    if (!s.to_bins) {
+      // The first light change reads the relight back once: its dimension sizes the converter.
+      LocalRadiance first;
+      s.pending.relight_kernel_ms += s.relighter->relight(light, first);
+      if (first.vertices != s.mesh.positions.size())
+        throw ParameterError(
+            fmt::format("frame renderer: backend '{}' relit {} vertices; the mesh has {}",
+                        s.transfer->backend(), first.vertices, s.mesh.positions.size()));
+      s.to_bins.emplace(*s.context, *s.grid, first.dim, first.vertices);
+    } else {
+      s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
+    }
+    s.pending.relight_kernel_ms += s.to_bins->run(s.relighter->output_buffer());
+    s.radiance_on_host = false;
   } else {
-    s.transfer->relight(light, s.radiance);
+    LocalRadiance relit;
+    s.transfer->relight(light, relit);
+    s.radiance = to_pixel_basis(relit, *s.grid);
     s.radiance_on_host = true;
-    if (s.radiance.basis != RadianceBasis::kPixel ||
-        s.radiance.vertices != s.mesh.positions.size())
+    if (s.radiance.basis != RadianceBasis::kPixel || s.radiance.vertices != s.mesh.positions.size())
       throw ParameterError(
           fmt::format("frame renderer: backend '{}' produced {} values for {} "
                       "vertices; the mesh has {}",
@@ -128,7 +149,8 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
   s.background.emplace(background ? *background : environment);
   if (s.shader) {
     t0 = Clock::now();
-    s.shader->set_radiance_buffer(s.relighter->output_buffer());
+    s.shader->set_radiance_buffer(s.to_bins ? s.to_bins->output_buffer()
+                                            : s.relighter->output_buffer());
     s.shader->set_background(&*s.background);
     s.pending.upload_ms += ms_since(t0);
   }
@@ -178,8 +200,8 @@ const LocalRadiance& FrameRenderer::radiance() const {
   if (!s.radiance_on_host && s.relighter && s.environment) {
     s.radiance = LocalRadiance(RadianceBasis::kPixel, s.local_count, s.mesh.positions.size());
     if (!s.radiance.values.empty())
-      download(*s.context, s.relighter->output_buffer(), std::span<Rgb>(s.radiance.values),
-               "frame renderer local radiance");
+      download(*s.context, s.to_bins ? s.to_bins->output_buffer() : s.relighter->output_buffer(),
+               std::span<Rgb>(s.radiance.values), "frame renderer local radiance");
     s.radiance_on_host = true;
   }
   return s.radiance;
@@ -192,21 +214,7 @@ const DeviceBtfShader* FrameRenderer::device_shader() const {
 
 ShadingMaterials load_scene_materials(const SceneDesc& desc, BtfParams params, StageCache& cache,
                                       bool show_progress, int* cache_hits) {
-  params.light_side = desc.local_grid;
-  std::map<std::string, std::shared_ptr<const Btf>> by_name;
-  ShadingMaterials materials;
-  if (cache_hits) *cache_hits = 0;
-  for (const ScenePart& part : desc.parts) {
-    auto it = by_name.find(part.btf);
-    if (it == by_name.end()) {
-      BtfStageResult r =
-          generate_btf_cached(part.btf, params, cache, CacheMode::kUse, show_progress);
-      if (cache_hits && r.cache_hit) ++*cache_hits;
-      it = by_name.emplace(part.btf, std::make_shared<const Btf>(std::move(r.btf))).first;
-    }
-    materials.part_btf.push_back(it->second);
-  }
-  return materials;
+  return {scene_part_btfs(desc, params, cache, show_progress, cache_hits)};
 }
 
 LatLongImage rotate_latlong_y(const LatLongImage& image, double degrees) {

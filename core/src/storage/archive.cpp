@@ -13,8 +13,8 @@
 #include <functional>
 #include <set>
 
-#include "prtlab/storage/atomic_file.h"
 #include "prtlab/base/build_info.h"
+#include "prtlab/storage/atomic_file.h"
 
 namespace prt {
 namespace {
@@ -482,6 +482,28 @@ const SectionInfo& ArchiveReader::checked(std::string_view name, ElementType typ
     throw InputError(path_, fmt::format("section '{}' has {} elements, expected {}", name,
                                         info.count, expected_count));
   return info;
+}
+
+ArchiveWriter& ArchiveWriter::add_indices(std::string name, std::span<const std::uint32_t> values,
+                                          bool narrow) {
+  if (!narrow) return add_section(std::move(name), values);
+  std::vector<std::uint16_t> v16(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (values[i] > 0xffffu)
+      throw ParameterError(
+          fmt::format("archive section '{}': index {} does not fit u16", name, values[i]));
+    v16[i] = static_cast<std::uint16_t>(values[i]);
+  }
+  return add_section(std::move(name), std::move(v16));
+}
+
+std::vector<std::uint32_t> ArchiveReader::indices(std::string_view name,
+                                                  std::uint64_t expected_count) const {
+  if (section_info(name).type == ElementType::kUInt16) {
+    const auto v = view<std::uint16_t>(name, expected_count);
+    return {v.begin(), v.end()};
+  }
+  return section<std::uint32_t>(name, expected_count);
 }
 
 }  // namespace prt

@@ -7,8 +7,9 @@
 #include <iterator>
 #include <sstream>
 
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/transfer_io.h"
 
 namespace prt {
@@ -18,10 +19,6 @@ std::vector<char> read_bytes(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file, "cannot open for reading");
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // Camera presets do not change T, so a view-only edit of the scene file must not invalidate the

@@ -44,13 +44,7 @@ TransferResult load_transfer(const ArchiveReader& r) {
   const auto s = r.meta_value<int>("supersampling");
   const auto sh_order = r.meta_value<int>("sh_order");
   TransferResult out;
-  std::vector<std::uint32_t> columns;
-  if (r.section_info("columns").type == ElementType::kUInt16) {
-    const auto c16 = r.view<std::uint16_t>("columns");
-    columns.assign(c16.begin(), c16.end());
-  } else {
-    columns = r.section<std::uint32_t>("columns");
-  }
+  const std::vector<std::uint32_t> columns = r.indices("columns");
   try {
     out.transfer =
         TransferMatrix::from_csr(vertices, m, n, s, r.section<std::uint32_t>("row_offsets"),

@@ -12,11 +12,12 @@
 #include <ctime>
 #include <limits>
 
-#include "prtlab/sphere/cubemap.h"
 #include "prtlab/base/error.h"
-#include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/base/log.h"
 #include "prtlab/base/progress.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/transfer/visibility.h"
 
 namespace prt {
@@ -247,10 +248,6 @@ struct ThreadScratch {
   std::vector<std::uint32_t> cursor;
   ShTransferIntegrator::Scratch sh;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // CPU time of the calling thread: phase times stay meaningful on a loaded machine, where
 // wall-clock per thread would include time spent preempted.

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "prtlab/base/error.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
@@ -11,29 +14,48 @@ namespace {
 
 class CooCompressor final : public Compressor {
  public:
+  explicit CooCompressor(double keep) : keep_(keep) {}
+
   std::unique_ptr<CompressedTransfer> compress(const TransferInput& input,
                                                Progress& progress) const override {
+    check_transfer_shape(input, kName);
     const TransferMatrix& t = input.transfer;
-    if (t.cols() != static_cast<std::size_t>(input.cubemap.pixel_count()) ||
-        t.local_count() != input.grid.cell_count())
-      throw ParameterError(fmt::format("{}: the transfer is {} x {} per vertex, the bases M = {}, N = {}",
-                                       kName, t.local_count(), t.cols(), input.grid.cell_count(),
-                                       input.cubemap.pixel_count()));
     Triplets out;
     out.vertices = t.vertex_count();
     out.local_count = t.local_count();
     out.pixel_count = static_cast<int>(t.cols());
     out.rows.reserve(t.nnz());
     const auto offsets = t.row_offsets();
-    for (std::size_t row = 0; row < t.rows(); ++row)
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
+    double dropped_sq = 0, norm_sq = 0;
+    std::vector<std::uint32_t> order;
+    for (std::size_t row = 0; row < t.rows(); ++row) {
+      const std::uint32_t begin = offsets[row], end = offsets[row + 1];
+      order.resize(end - begin);
+      for (std::uint32_t i = begin; i < end; ++i) order[i - begin] = i;
+      // Largest first, ties by column: deterministic.
+      std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return t.counts()[a] > t.counts()[b];
+      });
+      const auto kept =
+          static_cast<std::size_t>(std::ceil(keep_ * static_cast<double>(order.size())));
+      for (std::size_t q = kept; q < order.size(); ++q)
+        dropped_sq += double(t.value(order[q])) * t.value(order[q]);
+      order.resize(kept);
+      std::sort(order.begin(), order.end());
+      for (std::uint32_t i = begin; i < end; ++i) norm_sq += double(t.value(i)) * t.value(i);
+      for (std::uint32_t i : order) {
         out.rows.push_back(static_cast<std::uint32_t>(row));
         out.columns.push_back(t.column(i));
         out.values.push_back(t.value(i));
       }
+    }
+    out.expected_frobenius = norm_sq > 0 ? std::sqrt(dropped_sq / norm_sq) : 0.0;
     progress.finish();
     return std::make_unique<CooTransfer>(std::move(out));
   }
+
+ private:
+  double keep_;
 };
 
 }  // namespace
@@ -54,9 +76,7 @@ StorageReport CooTransfer::storage() const {
 }
 
 void CooTransfer::check_light(const LightCoeffs& light) const {
-  if (light.basis != "pixel" || light.values.size() != static_cast<std::size_t>(t_.pixel_count))
-    throw ParameterError(fmt::format("{}: relight needs a pixel-basis light of N = {} values, got '{}' with {}",
-                                     kName, t_.pixel_count, light.basis, light.values.size()));
+  check_pixel_light(light, static_cast<std::size_t>(t_.pixel_count), kName);
 }
 
 LightCoeffs CooTransfer::project_light(const Cubemap& radiance) const {
@@ -84,6 +104,7 @@ std::unique_ptr<DeviceRelighter> CooTransfer::upload(ClContext& context, const P
 
 void CooTransfer::save(ArchiveWriter& w) const {
   w.add_meta("coo_version", kStateVersion);
+  w.add_meta("expected_frobenius", t_.expected_frobenius);
   w.add_meta("vertices", t_.vertices);
   w.add_meta("local_count", t_.local_count);
   w.add_meta("pixel_count", t_.pixel_count);
@@ -94,8 +115,12 @@ void CooTransfer::save(ArchiveWriter& w) const {
 
 std::unique_ptr<CompressedTransfer> CooTransfer::load(const ArchiveReader& r) {
   if (const int v = r.meta_value<int>("coo_version"); v != kStateVersion)
-    throw InputError(r.path(), fmt::format("{} state version {} is not {}", kName, v, kStateVersion));
+    throw InputError(r.path(),
+                     fmt::format("{} state version {} is not {}", kName, v, kStateVersion));
   Triplets t;
+  t.expected_frobenius = r.meta_value<double>("expected_frobenius");
+  if (!(t.expected_frobenius >= 0 && t.expected_frobenius <= 1))
+    throw InputError(r.path(), "coo: expected_frobenius out of [0, 1]");
   t.vertices = r.meta_value<std::size_t>("vertices");
   t.local_count = r.meta_value<int>("local_count");
   t.pixel_count = r.meta_value<int>("pixel_count");
@@ -116,10 +141,18 @@ namespace {
 CompressorEntry registry_entry() {
   CompressorEntry e;
   e.name = std::string(kName);
-  e.description = "test-only: T as sorted (row, column, value) triplets, proving a backend is its folder";
+  e.description =
+      "test-only: T as sorted (row, column, value) triplets, proving a backend is its folder";
+  e.params = {{"keep",
+               ParamType::kReal,
+               "1",
+               0.0,
+               1.0,
+               {},
+               "fraction of each row's entries kept, largest first (1 = lossless)"}};
   e.lossless = true;
-  e.create = [](const ParamSet&) -> std::unique_ptr<Compressor> {
-    return std::make_unique<CooCompressor>();
+  e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
+    return std::make_unique<CooCompressor>(p.get_real("keep"));
   };
   e.load = &CooTransfer::load;
   return e;

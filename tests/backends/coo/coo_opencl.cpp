@@ -34,19 +34,13 @@ class CooDevice final : public DeviceRelighter {
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "coo light");
     out_ = make_buffer(ctx, std::max<std::size_t>(rows_, 1) * sizeof(Rgb), CL_MEM_WRITE_ONLY,
                        "coo local radiance");
-    bytes_ = starts.size() * 4 + t.columns.size() * 8 + cols_ * sizeof(cl_float4) +
-             rows_ * sizeof(Rgb);
+    bytes_ = buffer_bytes({&starts_, &columns_, &values_, &light_, &out_});
     set_args(kernel_, static_cast<cl_uint>(rows_), starts_, columns_, values_, light_, out_);
   }
 
   double relight_on_device(const LightCoeffs& light) override {
-    if (light.basis != "pixel" || light.values.size() != cols_)
-      throw ParameterError(fmt::format("{}: relight needs a pixel-basis light of N = {} values",
-                                       kName, cols_));
-    for (std::size_t k = 0; k < cols_; ++k)
-      light_host_[k] = cl_float4{{light.values[k].x, light.values[k].y, light.values[k].z, 0.f}};
-    write_buffer(ctx_, light_, light_host_.data(), light_host_.size() * sizeof(cl_float4),
-                 "coo light");
+    check_pixel_light(light, cols_, kName);
+    upload_light(ctx_, light_, light.values, light_host_, "coo light");
     if (rows_ == 0) return 0.0;
     cl::Event event = launch(ctx_, "coo.relight", kernel_, LaunchRange::linear(rows_, kWorkGroup));
     return event_milliseconds(event, ctx_.info().device_name, "timing of kernel coo.relight");

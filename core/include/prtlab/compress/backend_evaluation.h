@@ -2,7 +2,10 @@
 // Measuring a compressed transfer against the exact product: the numbers every report prints.
 //
 // Error: relative L2 of L* (all rows, RGB) vs the exact CSR product accumulated in double, per
-// light; the summary is the mean and the maximum over the light set. Lights: the 8 Blender
+// light; the summary is the mean and the maximum over the light set. Also the relative
+// Frobenius error ||T~ - T||_F / ||T||_F and the largest per-vertex relative error
+// (transfer_error.h). A backend relighting into another basis (SH) is compared at the local
+// bins (to_pixel_basis). Lights: the 8 Blender
 // world maps when the data cache has them, else procedural sun-and-sky variants.
 // Time: median over `repeats` relights, C++ (wall) and OpenCL (kernel time from events).
 #include <map>
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "prtlab/compress/compressor.h"
+#include "prtlab/compress/transfer_error.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
@@ -35,19 +39,28 @@ struct BackendEvaluation {
   std::vector<LightError> errors;
   double mean_rel_l2 = 0;
   double max_rel_l2 = 0;
-  double ms_cpp = 0;                    ///< median C++ relight (light projection excluded)
-  double ms_project = 0;                ///< median light projection
-  std::optional<double> ms_opencl;      ///< median kernel time; empty without a device
+  FrobeniusError frobenius;         ///< ||T~ - T||_F / ||T||_F (exact or estimated, see its fields)
+  double max_vertex_rel = 0;        ///< largest per-vertex relative error over the lights
+  std::size_t worst_vertex = 0;     ///< where it occurs
+  double ms_cpp = 0;                ///< median C++ relight (light projection excluded)
+  double ms_project = 0;            ///< median light projection
+  std::optional<double> ms_opencl;  ///< median kernel time; empty without a device
   std::optional<double> opencl_vs_cpp;  ///< relative L2 of OpenCL vs C++ output
   std::string device;                   ///< device label, or "none"
 };
 
+struct EvaluationOptions {
+  int repeats = 20;                                   ///< relights timed (medians reported)
+  std::map<std::string, std::string> device_options;  ///< the backend's device_params
+  /// Relights spent on the Frobenius error: exact when N / 3 fits, else Hutchinson's estimate.
+  int frobenius_relights = 64;
+  std::uint64_t seed = 1;  ///< of the Frobenius estimate
+};
+
 /// Evaluate `ct` on `lights` (error per light vs the exact product with `exact`), timing the
-/// first light's relight `repeats` times. `context` may be null (no OpenCL); the device path
-/// is uploaded with `device_options` (the backend's device_params).
+/// first light's relight `repeats` times. `context` may be null (no OpenCL).
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
-                                   int repeats,
-                                   const std::map<std::string, std::string>& device_options = {});
+                                   const EvaluationOptions& options = {});
 
 }  // namespace prt

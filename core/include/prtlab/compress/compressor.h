@@ -9,16 +9,17 @@
 // Every backend is measured against the exact CSR product L* = T L in the pixel basis.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "prtlab/base/progress.h"
+#include "prtlab/compress/params.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/transfer/local_radiance.h"
-#include "prtlab/compress/params.h"
-#include "prtlab/base/progress.h"
 
 namespace cl {
 class Buffer;
@@ -28,17 +29,24 @@ namespace prt {
 
 class TransferMatrix;
 class ShTransfer;
+struct Mesh;
+class Btf;
 class ArchiveWriter;
 class ArchiveReader;
 class ClContext;
 class ParamSet;
 
-/// What a compressor sees: the exact transfer and the bases it lives in.
+/// What a compressor sees: the exact transfer, the bases it lives in, and whatever else its
+/// registry entry declares it needs (CompressorEntry::inputs; prepare_scene() in
+/// backend_input.h fills exactly that).
 struct TransferInput {
   const TransferMatrix& transfer;  ///< pixel basis, (vertices * M) x N, exact
-  const ShTransfer* sh = nullptr;  ///< SH transfer, when the scene computed one
+  const ShTransfer* sh = nullptr;  ///< SH transfer, when the entry asks for an SH order
   const CubemapLayout& cubemap;    ///< global basis (N = 6 R^2)
   const HemisphereGrid& grid;      ///< local basis (M = S^2)
+  const Mesh* mesh = nullptr;      ///< the scene's mesh with parts and frames, when asked for
+  /// The BTF of every mesh part (part order), when asked for.
+  std::span<const std::shared_ptr<const Btf>> btfs = {};
 };
 
 /// Light in a backend's basis: `basis` names it ("pixel", "haar", "sh5", "srbf642", ...).
@@ -94,6 +102,12 @@ class CompressedTransfer {
   /// rounding remains).
   virtual double declared_error_bound() const = 0;
   virtual ErrorNorm declared_error_norm() const { return ErrorNorm::kRelativeL2; }
+  /// The relative Frobenius error ||T~ - T||_F / ||T||_F the backend expects of itself, computed
+  /// while compressing (a fit's residual, the dropped entries' norm), or nullopt when it
+  /// declares none. Lossy backends without a proven bound report it so that the conformance
+  /// suite can hold them to it: the measured error (transfer_error.h) must agree within 1e-3
+  /// relative. Lossless results need not declare it (0 is checked from `lossless`).
+  virtual std::optional<double> expected_frobenius_error() const { return std::nullopt; }
   /// Basis of the LocalRadiance relight() produces.
   virtual RadianceBasis output_basis() const { return RadianceBasis::kPixel; }
 
@@ -118,6 +132,12 @@ class CompressedTransfer {
 inline std::string_view to_string(CompressedTransfer::ErrorNorm n) {
   return n == CompressedTransfer::ErrorNorm::kRelativeL1 ? "relative_l1" : "relative_l2";
 }
+
+/// Throws ParameterError naming `backend` unless T is (vertices * M) x N for the bases' M and N.
+void check_transfer_shape(const TransferInput& input, std::string_view backend);
+/// Throws ParameterError naming `backend` unless `light` is a pixel-basis light of `pixels`
+/// values.
+void check_pixel_light(const LightCoeffs& light, std::size_t pixels, std::string_view backend);
 
 class Compressor {
  public:

@@ -20,6 +20,15 @@
 
 namespace prt {
 
+/// What a backend needs besides the pixel-basis T, which every backend gets (it is what all
+/// are measured against). prepare_scene() (backend_input.h) builds exactly the union of what
+/// the backends of a run declare, so no caller names a backend to know what to compute.
+struct BackendInputs {
+  int sh_order = 0;   ///< the SH transfer of this order (n^2 x n^2 per vertex); 0: none
+  bool mesh = false;  ///< the scene's mesh (parts, frames, UVs)
+  bool btfs = false;  ///< the scene's BTFs, one per part
+};
+
 struct CompressorEntry {
   std::string name;
   std::string description;        ///< one line: the method and its paper
@@ -29,6 +38,7 @@ struct CompressorEntry {
   /// not in the stage-cache key, so changing one never recompresses. The conformance suite
   /// checks every combination of their choices against the C++ relight.
   std::vector<ParamSpec> device_params;
+  BackendInputs inputs;  ///< what compress() reads from TransferInput besides T
   bool lossless =
       false;  ///< at default parameters, relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;

@@ -7,16 +7,21 @@
 // the valid keys with their documentation. Keys shared by every backend are in
 // shared_param_specs() ("seed", ...).
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
 namespace prt {
 
-enum class ParamType { kInt, kReal, kBool, kString };
+/// kEnum: one of `choices` (required, default among them), read with get_enum() or
+/// get_string(); kString: any text, or one of `choices` when given.
+enum class ParamType { kInt, kReal, kBool, kString, kEnum };
 std::string_view to_string(ParamType t);
 
 struct ParamSpec {
@@ -48,7 +53,18 @@ class ParamSet {
   std::int64_t get_int(const std::string& key) const;
   double get_real(const std::string& key) const;
   bool get_bool(const std::string& key) const;
+  /// kString or kEnum.
   const std::string& get_string(const std::string& key) const;
+  /// A kEnum value mapped through `names` (every choice of the spec must be listed: a missing
+  /// one is an internal error naming it).
+  template <typename E>
+  E get_enum(const std::string& key,
+             std::initializer_list<std::pair<std::string_view, E>> names) const {
+    const std::string& value = get_enum_name(key);
+    for (const auto& [name, e] : names)
+      if (name == value) return e;
+    enum_not_mapped(key, value);
+  }
   bool was_given(const std::string& key) const { return given_.contains(key); }
   /// Every value (given or default) as "key=value" strings, sorted: used in cache keys and reports.
   std::map<std::string, std::string> canonical() const;
@@ -58,6 +74,8 @@ class ParamSet {
 
  private:
   const Value& get(const std::string& key, ParamType type) const;
+  const std::string& get_enum_name(const std::string& key) const;
+  [[noreturn]] void enum_not_mapped(const std::string& key, const std::string& value) const;
   std::string owner_;
   std::map<std::string, Value> values_;
   std::map<std::string, ParamType> types_;

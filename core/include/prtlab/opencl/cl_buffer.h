@@ -6,10 +6,13 @@
 // report those the same way.
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <span>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
+#include "prtlab/base/types.h"
 #include "prtlab/opencl/cl_include.h"
 
 namespace prt {
@@ -29,6 +32,15 @@ void read_buffer(ClContext& ctx, const cl::Buffer& buffer, void* data, std::size
                  std::string_view what, std::size_t offset = 0);
 
 /// A new buffer holding `data` (blocking upload).
+/// Writes an RGB light to `buffer` as float4 (RGB + a zero pad), the layout every relight kernel
+/// reads; `scratch` is the caller's staging vector, kept to avoid an allocation per light.
+void upload_light(ClContext& ctx, const cl::Buffer& buffer, std::span<const Rgb> light,
+                  std::vector<cl_float4>& scratch, std::string_view what);
+
+/// The bytes the buffers hold (CL_MEM_SIZE), for DeviceRelighter::device_bytes(): counted from
+/// what was allocated, not recomputed by hand.
+std::uint64_t buffer_bytes(std::initializer_list<const cl::Buffer*> buffers);
+
 template <typename T>
 requires std::is_trivially_copyable_v<T> cl::Buffer upload(ClContext& ctx, std::span<const T> data,
                                                            std::string_view what,
@@ -39,6 +51,15 @@ requires std::is_trivially_copyable_v<T> cl::Buffer upload(ClContext& ctx, std::
 }
 
 /// Blocking read of out.size() elements from the start of `buffer`.
+/// Writes an RGB light to `buffer` as float4 (RGB + a zero pad), the layout every relight kernel
+/// reads; `scratch` is the caller's staging vector, kept to avoid an allocation per light.
+void upload_light(ClContext& ctx, const cl::Buffer& buffer, std::span<const Rgb> light,
+                  std::vector<cl_float4>& scratch, std::string_view what);
+
+/// The bytes the buffers hold (CL_MEM_SIZE), for DeviceRelighter::device_bytes(): counted from
+/// what was allocated, not recomputed by hand.
+std::uint64_t buffer_bytes(std::initializer_list<const cl::Buffer*> buffers);
+
 template <typename T>
 requires std::is_trivially_copyable_v<T>
 void download(ClContext& ctx, const cl::Buffer& buffer, std::span<T> out, std::string_view what) {

@@ -20,12 +20,12 @@
 #include <string>
 
 #include "prtlab/btf/btf_generator.h"
-#include "prtlab/render/btf_shading.h"
-#include "prtlab/geometry/camera.h"
 #include "prtlab/compress/compressor.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/render/gbuffer.h"
+#include "prtlab/geometry/camera.h"
 #include "prtlab/geometry/scene.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/render/gbuffer.h"
 #include "prtlab/storage/stage_cache.h"
 
 namespace prt {
@@ -37,9 +37,9 @@ struct FrameStageTimes {
   double gbuffer_ms = 0;         ///< view change: Embree primary rays
   double gbuffer_upload_ms = 0;  ///< view change: G-buffer compaction + upload (device path)
   double project_ms = 0;         ///< light change: CompressedTransfer::project_light
-  double relight_ms = 0;  ///< light change: relight (device: light upload and kernels)
-  double upload_ms = 0;   ///< light change: background upload to the shader (device path)
-  double shade_ms = 0;    ///< shading pass, waited for (device: kernels; C++: the reference)
+  double relight_ms = 0;         ///< light change: relight (device: light upload and kernels)
+  double upload_ms = 0;          ///< light change: background upload to the shader (device path)
+  double shade_ms = 0;           ///< shading pass, waited for (device: kernels; C++: the reference)
   /// Device time of the shading kernels (OpenCL profiling; 0 on the C++ path), and the part of
   /// it spent building the view cache (0 unless the G-buffer changed).
   double shade_kernel_ms = 0;
@@ -66,9 +66,10 @@ struct FrameStats {
 
 class FrameRenderer {
  public:
-  /// `context` null: C++ relight and shading. Throws ParameterError when the transfer's output
-  /// is not in the pixel basis, its vertex count differs from the mesh's, or a material does
-  /// not match (validate_materials).
+  /// `context` null: C++ relight and shading. A transfer relighting into another basis (SH) is
+  /// evaluated at the bins (to_pixel_basis; on the device, DeviceRadianceToBins). Throws
+  /// ParameterError when its vertex count differs from the mesh's or a material does not match
+  /// (validate_materials).
   /// `device_options`: the backend's device_params for its upload.
   FrameRenderer(Mesh mesh, ShadingMaterials materials,
                 std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
@@ -81,9 +82,9 @@ class FrameRenderer {
   /// View change: trace and upload the G-buffer. L* is kept.
   void set_camera(const Camera& camera);
   /// Light change: project, relight (on the device path the shader then reads L* from the
-  /// relighter's output buffer: nothing crosses to the host), upload the background. `background`, when given,
-  /// is what misses show (e.g. a finer cubemap of the same environment); without it misses
-  /// show the lighting cubemap itself.
+  /// relighter's output buffer: nothing crosses to the host), upload the background. `background`,
+  /// when given, is what misses show (e.g. a finer cubemap of the same environment); without it
+  /// misses show the lighting cubemap itself.
   void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
   /// Shade (needs a camera and an environment: ParameterError otherwise).
   FrameStats render();
@@ -93,7 +94,7 @@ class FrameRenderer {
   bool uses_opencl() const;
   const FrameCounters& counters() const;
   const Mesh& mesh() const;
-  const GBuffer& gbuffer() const;         ///< of the current camera
+  const GBuffer& gbuffer() const;  ///< of the current camera
   /// L* of the current environment (on the device path read back on the first call after a
   /// light change).
   const LocalRadiance& radiance() const;

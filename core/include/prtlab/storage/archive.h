@@ -31,8 +31,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "prtlab/storage/content_hash.h"
 #include "prtlab/base/error.h"
+#include "prtlab/storage/content_hash.h"
 
 namespace prt {
 
@@ -136,6 +136,10 @@ class ArchiveWriter {
     return add_vector<T>(std::move(name), std::make_shared<std::vector<T>>(std::move(values)));
   }
 
+  /// Indices stored as u16 when `narrow` (every value must fit: ParameterError otherwise), else
+  /// as u32; read back with ArchiveReader::indices().
+  ArchiveWriter& add_indices(std::string name, std::span<const std::uint32_t> values, bool narrow);
+
   const std::string& kind() const { return kind_; }
   std::uint32_t kind_version() const { return kind_version_; }
   bool has_section(std::string_view name) const;
@@ -200,6 +204,10 @@ class ArchiveReader {
 
   const std::filesystem::path& path() const { return path_; }
   std::uint32_t format_version() const { return format_version_; }
+  /// Indices stored as u16 when `narrow` (every value must fit: ParameterError otherwise), else
+  /// as u32; read back with ArchiveReader::indices().
+  ArchiveWriter& add_indices(std::string name, std::span<const std::uint32_t> values, bool narrow);
+
   const std::string& kind() const { return kind_; }
   std::uint32_t kind_version() const { return kind_version_; }
   std::uint64_t size_bytes() const { return size_; }
@@ -238,6 +246,11 @@ class ArchiveReader {
     const auto v = view<T>(name, expected_count);
     return std::vector<T>(v.begin(), v.end());
   }
+
+  /// An index section written by add_indices (u16 or u32), widened to u32, with the count
+  /// checked as view() does.
+  std::vector<std::uint32_t> indices(std::string_view name,
+                                     std::uint64_t expected_count = kAnyCount) const;
 
   // Copies share the (immutable) file contents.
   ArchiveReader(const ArchiveReader&);

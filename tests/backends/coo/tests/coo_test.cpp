@@ -1,16 +1,18 @@
 // The test-only backend `coo` is wired in by its folder alone: registered under its folder's
 // name, its deps.cmake applied, its kernel embedded, its relight equal to the exact product.
+#include "coo/coo.h"
+
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
-#include "support/cli_runner.h"
-#include "support/temp_dir.h"
-
-#include "coo/coo.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/transfer_error.h"
 #include "prtlab/opencl/cl_kernel_sources.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/random_transfer.h"
+#include "support/cli_runner.h"
+#include "support/temp_dir.h"
 
 namespace prt {
 namespace {
@@ -24,11 +26,11 @@ TEST(CooBackend, IsRegisteredWithItsDepsAndKernel) {
 
 TEST(CooBackend, RelightsLikeTheExactProduct) {
   const TransferMatrix t = random_transfer(11, RandomTransferSpec{.vertices = 7,
-                                                                   .grid_side = 3,
-                                                                   .resolution = 2,
-                                                                   .supersampling = 2,
-                                                                   .density = 0.4,
-                                                                   .empty_vertices = {2}});
+                                                                  .grid_side = 3,
+                                                                  .resolution = 2,
+                                                                  .supersampling = 2,
+                                                                  .density = 0.4,
+                                                                  .empty_vertices = {2}});
   const CubemapLayout cubemap(2);
   const HemisphereGrid grid(3);
   const auto ct = CompressorRegistry::instance().create("coo", {})->compress(
@@ -48,8 +50,31 @@ TEST(CooBackend, RelightsLikeTheExactProduct) {
   EXPECT_EQ(ct->storage().total_bytes(), t.nnz() * 12);
 }
 
-bool lists_coo(const std::string& json) {
-  for (const auto& b : nlohmann::json::parse(json).at("backends"))
+// The lossy mode's declared Frobenius error is what the generic measurement finds.
+TEST(CooBackend, DeclaresTheFrobeniusErrorItHas) {
+  const TransferMatrix t = random_transfer(5, RandomTransferSpec{.vertices = 9,
+                                                                 .grid_side = 3,
+                                                                 .resolution = 3,
+                                                                 .supersampling = 3,
+                                                                 .density = 0.6,
+                                                                 .empty_vertices = {}});
+  const CubemapLayout cubemap(3);
+  const HemisphereGrid grid(3);
+  const auto ct = CompressorRegistry::instance()
+                      .create("coo", {{"keep", "0.5"}})
+                      ->compress({t, nullptr, cubemap, grid}, Progress::null());
+  ASSERT_TRUE(ct->expected_frobenius_error().has_value());
+  const double expected = *ct->expected_frobenius_error();
+  EXPECT_GT(expected, 0.05) << "half the entries dropped";
+  const FrobeniusError measured = frobenius_error(*ct, t, grid);
+  ASSERT_TRUE(measured.exact);
+  EXPECT_NEAR(measured.relative, expected, 1e-5 * expected);
+  EXPECT_LT(ct->storage().total_bytes(), t.nnz() * 12);
+}
+
+bool lists_coo(const std::string& text) {
+  const auto json = nlohmann::json::parse(text);
+  for (const auto& b : json.at("backends"))
     if (b.at("name") == "coo") return b.at("origin") == "built-in";
   return false;
 }
