@@ -6,8 +6,8 @@
 #include "commands.h"
 #include "paper_table.h"
 #include "prtlab/base/build_info.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
 #include "table_report.h"
 
 namespace prt::cli {
@@ -21,6 +21,8 @@ struct TableCli {
   bool json = false;
   bool plot = true;
   std::vector<std::string> params;
+  std::string backend = experiments::kTableBackend;
+  std::string reference = experiments::kReferenceBackend;
   int repeats = 20;
   int lights = 8;
 };
@@ -73,6 +75,8 @@ void run_table(const TableCli& o) {
   TableOptions opt;
   opt.scenes = o.scenes;
   opt.params = ParamSet::parse_assignments(o.params);
+  opt.backend = o.backend;
+  opt.reference = o.reference;
   opt.force = o.force;
   opt.repeats = o.repeats;
   opt.evaluation_lights = o.lights;
@@ -83,8 +87,9 @@ void run_table(const TableCli& o) {
   // Validate the scenes and backend parameters before opening a device (a typo must cost
   // nothing); run_paper_table validates them again, cheaply.
   (void)resolve_table_scenes(table, opt.scenes);
-  const auto& entry = CompressorRegistry::instance().get(kTableBackend);
-  (void)ParamSet(kTableBackend, entry.params, opt.params);
+  const auto& entry = CompressorRegistry::instance().get(opt.backend);
+  (void)ParamSet(opt.backend, entry.params, opt.params);
+  (void)CompressorRegistry::instance().get(opt.reference);
   auto ctx = open_device_from_options();
   opt.device = ctx ? &*ctx : nullptr;
 
@@ -126,7 +131,12 @@ void add_experiment_commands(CLI::App& app) {
     c->add_flag("--force", o->force,
                 "Recompute T and the compressions instead of loading them from the stage cache");
     c->add_flag("--json", o->json, "Print the result as JSON (docs/cli.md)");
-    c->add_option("--param,-p", o->params, "bicluster parameter key=value (repeatable)");
+    c->add_option("--backend,-b", o->backend,
+                  "The backend the table measures (default bicluster, the paper's; any registered "
+                  "one, a --plugin's too)");
+    c->add_option("--reference", o->reference,
+                  "The timing reference backend (default uncompressed, the exact product)");
+    c->add_option("--param,-p", o->params, "Parameter of the backend key=value (repeatable)");
     c->add_option("--repeats", o->repeats, "Timed relights per backend (median reported)")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();

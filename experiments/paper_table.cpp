@@ -6,6 +6,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/geometry/scene.h"
@@ -43,11 +44,15 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
   row.scene_file = desc.file;
 
   report("exact transfer T");
-  PrecomputeOptions popt;
+  PrepareOptions popt;
   popt.cache = mode;
   popt.show_progress = o.show_progress_bars;
-  const SceneTransfer st = precompute_scene_transfer(desc, popt, cache);
+  const std::vector<std::string> backends = {o.backend, o.reference};
+  const PreparedScene scene = prepare_scene_for(desc, backends, cache, popt);
+  const SceneTransfer& st = scene.transfer;
   const TransferMatrix& t = st.result.transfer;
+  row.backend = o.backend;
+  row.reference = o.reference;
   row.vertices = t.vertex_count();
   row.local_count = t.local_count();
   row.pixel_count = static_cast<int>(t.cols());
@@ -64,18 +69,18 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
                      st.cache_hit ? "from the cache, computed" : "computed now",
                      row.transfer_seconds));
 
-  const CubemapLayout layout(desc.cubemap_resolution);
-  const HemisphereGrid grid(desc.local_grid);
-  const TransferInput input{t, nullptr, layout, grid};
-  report("biclustering");
+  const auto& registry = CompressorRegistry::instance();
+  report(fmt::format("compression ({})", o.backend));
   const CompressionResult bic =
-      compress_cached(kTableBackend, o.params, input, st.key, cache, mode, o.show_progress_bars);
+      compress_cached(o.backend, o.params, scene.input(registry.get(o.backend)), st.key, cache,
+                      mode, o.show_progress_bars);
   const CompressionResult ref =
-      compress_cached(kReferenceBackend, {}, input, st.key, cache, mode, o.show_progress_bars);
+      compress_cached(o.reference, {}, scene.input(registry.get(o.reference)), st.key, cache, mode,
+                      o.show_progress_bars);
   row.params = bic.params;
-  row.bicluster_seconds = bic.compress_seconds;
-  row.bicluster_cache_hit = bic.cache_hit;
-  row.precompute_minutes = (row.transfer_seconds + row.bicluster_seconds) / 60.0;
+  row.compress_seconds = bic.compress_seconds;
+  row.compress_cache_hit = bic.cache_hit;
+  row.precompute_minutes = (row.transfer_seconds + row.compress_seconds) / 60.0;
   const StorageReport storage = bic.compressed->storage();
   row.storage = storage.components;
   row.reduced_bytes = storage.total_bytes();
@@ -85,10 +90,11 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
   row.reduced_mflops = bic.compressed->flops_per_relight() / 1e6;
   row.computation_percent = row.mflops > 0 ? 100.0 * row.reduced_mflops / row.mflops : 0.0;
   report(fmt::format(
-      "bicluster: {:.2f} of {:.2f} MFLOPs ({:.1f} %), {:.1f} MB ({:.2f} %), {} in "
+      "{}: {:.2f} of {:.2f} MFLOPs ({:.1f} %), {:.1f} MB ({:.2f} %), {} in "
       "{:.2f} s",
-      row.reduced_mflops, row.mflops, row.computation_percent, row.reduced_mb, row.data_percent,
-      bic.cache_hit ? "from the cache, computed" : "computed now", row.bicluster_seconds));
+      o.backend, row.reduced_mflops, row.mflops, row.computation_percent, row.reduced_mb,
+      row.data_percent, bic.cache_hit ? "from the cache, computed" : "computed now",
+      row.compress_seconds));
 
   auto& lights = lights_by_resolution[desc.cubemap_resolution];
   if (lights.empty()) lights = evaluation_lights(desc.cubemap_resolution, o.evaluation_lights);
@@ -99,11 +105,14 @@ SceneRow measure_scene(const SceneDesc& desc, const TableOptions& o, StageCache&
       evaluate_backend(*bic.compressed, t, lights, o.device, {.repeats = o.repeats});
   const BackendEvaluation ev_ref =
       evaluate_backend(*ref.compressed, t, lights, o.device, {.repeats = o.repeats});
-  row.bicluster = timing_of(ev_bic);
-  row.uncompressed = timing_of(ev_ref);
+  row.subject = timing_of(ev_bic);
+  row.reference_timing = timing_of(ev_ref);
   row.ms_project_light = ev_bic.ms_project;
   row.rel_l2_error_mean = ev_bic.mean_rel_l2;
   row.rel_l2_error_max = ev_bic.max_rel_l2;
+  row.frobenius_rel_error = ev_bic.frobenius.relative;
+  row.frobenius_rel_error_stderr = ev_bic.frobenius.standard_error;
+  row.max_vertex_rel_error = ev_bic.max_vertex_rel;
 
   report("lossless check");
   LosslessOptions lossless = o.lossless;
@@ -137,8 +146,9 @@ TableResult run_paper_table(PaperTable table, const TableOptions& o) {
 
   // Validate everything cheap before the first expensive stage, so a typo costs nothing and
   // leaves nothing behind.
-  const auto& entry = CompressorRegistry::instance().get(kTableBackend);
-  const ParamSet validated(kTableBackend, entry.params, o.params);
+  const auto& entry = CompressorRegistry::instance().get(o.backend);
+  (void)CompressorRegistry::instance().get(o.reference);
+  const ParamSet validated(o.backend, entry.params, o.params);
   const std::vector<SceneDesc> scenes = resolve_table_scenes(table, o.scenes);
   std::vector<std::string> names;
   for (const auto& s : scenes) names.push_back(s.name);
@@ -154,10 +164,10 @@ TableResult run_paper_table(PaperTable table, const TableOptions& o) {
   }
 
   result.parameters = {
-      {"backend", kTableBackend},
+      {"backend", o.backend},
       {"backend_parameters", validated.canonical()},
       {"backend_version", entry.version},
-      {"reference_backend", kReferenceBackend},
+      {"reference_backend", o.reference},
       {"repeats", o.repeats},
       {"evaluation_lights", o.evaluation_lights},
       {"lossless_random_lights", o.lossless.random_lights},

@@ -1,9 +1,11 @@
 #pragma once
-// `prtlab experiment table1|table2`: regenerate the central paper's Table I / Table II with the
-// `bicluster` backend, our numbers beside the paper's (docs/experiments.md).
+// `prtlab experiment table1|table2`: regenerate the central paper's Table I / Table II, our
+// numbers beside the paper's (docs/experiments.md). The table's backend is `bicluster` by
+// default, the paper's method, but any registered backend (a plugin's too) fills the same
+// columns: TableOptions::backend, and the timing reference TableOptions::reference.
 //
-// Per scene: the exact transfer T (stage cache), its biclustering and the `uncompressed`
-// reference (stage cache), then
+// Per scene: the exact transfer T and what the two backends declare they need (prepare_scene),
+// the backend's compression and the reference's (stage cache), then
 //   nnz(T), MFLOPs = 2 nnz / 1e6 per colour channel, reduced MFLOPs = the bicluster's
 //   flops_per_relight / 1e6, computation % = reduced / MFLOPs, dense data MB = vertices x M x N
 //   bytes / 1e6, reduced MB = the bicluster's storage, data % = reduced / dense,
@@ -32,12 +34,16 @@ class ClContext;
 
 namespace prt::experiments {
 
+/// The paper's backend, the default of TableOptions::backend.
 inline constexpr const char* kTableBackend = "bicluster";
+/// The default timing reference: the exact CSR product.
 inline constexpr const char* kReferenceBackend = "uncompressed";
 
 struct TableOptions {
-  std::vector<std::string> scenes;  ///< empty: the table's scenes; else names or .toml paths
-  std::map<std::string, std::string> params;  ///< bicluster parameters (--param k=v)
+  std::vector<std::string> scenes;      ///< empty: the table's scenes; else names or .toml paths
+  std::string backend = kTableBackend;  ///< the backend the table measures (--backend)
+  std::string reference = kReferenceBackend;  ///< the timing reference (--reference)
+  std::map<std::string, std::string> params;  ///< the backend's parameters (--param k=v)
   bool force = false;                         ///< recompute T and the compressions
   int repeats = 20;                           ///< timed relights per backend (median)
   int evaluation_lights = 8;                  ///< error lights (backend_evaluation.h), 1..8
@@ -73,18 +79,23 @@ struct SceneRow {
   std::uint64_t reduced_bytes = 0;
   double reduced_mb = 0;
   double data_percent = 0;
-  std::vector<StorageComponent> storage;  ///< the bicluster's components
+  std::string backend;                    ///< the measured backend
+  std::string reference;                  ///< the timing reference
+  std::vector<StorageComponent> storage;  ///< the backend's components
   double transfer_seconds = 0;            ///< when T was computed
-  double bicluster_seconds = 0;           ///< when the biclustering ran
+  double compress_seconds = 0;            ///< when the backend's compression ran
   double precompute_minutes = 0;
   bool transfer_cache_hit = false;
-  bool bicluster_cache_hit = false;
-  std::map<std::string, std::string> params;  ///< canonical bicluster parameters
-  TimingPair bicluster;
-  TimingPair uncompressed;
+  bool compress_cache_hit = false;
+  std::map<std::string, std::string> params;  ///< canonical parameters of the backend
+  TimingPair subject;                         ///< the backend's relight times
+  TimingPair reference_timing;                ///< the reference's
   double ms_project_light = 0;
-  double rel_l2_error_mean = 0;  ///< bicluster vs exact, over the evaluation lights
+  double rel_l2_error_mean = 0;  ///< the backend vs exact, over the evaluation lights
   double rel_l2_error_max = 0;
+  double frobenius_rel_error = 0;  ///< ||T~ - T||_F / ||T||_F (transfer_error.h)
+  double frobenius_rel_error_stderr = 0;
+  double max_vertex_rel_error = 0;
   std::vector<std::string> evaluation_lights;
   LosslessCheck lossless;
   std::optional<PaperRow> paper;

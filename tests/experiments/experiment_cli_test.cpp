@@ -33,7 +33,7 @@ TEST_F(ExperimentCli, Table1OnTheTinySceneWritesItsFiles) {
   const auto& row = j.at("rows")[0];
   EXPECT_EQ(row.at("scene"), "tiny-sphere-plane");
   EXPECT_TRUE(row.at("lossless").at("exact").get<bool>());
-  EXPECT_TRUE(row.at("relight_ms").at("bicluster_opencl").is_null());  // --no-opencl
+  EXPECT_TRUE(row.at("relight_ms").at("backend_opencl").is_null());  // --no-opencl
   EXPECT_NEAR(row.at("computation_percent").get<double>(),
               100 * row.at("reduced_mflops").get<double>() / row.at("mflops").get<double>(), 1e-9);
   EXPECT_NE(j.at("provenance").at("command").get<std::string>().find("--scenes tiny-sphere-plane"),
