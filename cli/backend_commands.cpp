@@ -1,6 +1,7 @@
 // prtlab list / prtlab compress: the compressor backends.
 #include <cstdio>
 
+#include "backend_description.h"
 #include "commands.h"
 #include "prtlab/compress/backend_evaluation.h"
 #include "prtlab/compress/backend_input.h"
@@ -16,6 +17,7 @@ namespace {
 
 struct ListCli {
   bool json = false;
+  std::string markdown;  ///< a backend name: print its README parameter block
 };
 
 struct CompressCli {
@@ -30,35 +32,17 @@ struct CompressCli {
   std::string save;
 };
 
-nlohmann::json spec_json(const ParamSpec& s) {
-  nlohmann::json j{{"key", s.key},
-                   {"type", std::string(to_string(s.type))},
-                   {"default", s.default_value},
-                   {"doc", s.doc}};
-  if (s.min) j["min"] = *s.min;
-  if (s.max) j["max"] = *s.max;
-  if (!s.choices.empty()) j["choices"] = s.choices;
-  return j;
-}
-
 void run_list(const ListCli& o) {
   const auto& reg = CompressorRegistry::instance();
+  if (!o.markdown.empty()) {
+    std::fputs(backend_markdown(reg.get(o.markdown)).c_str(), stdout);
+    return;
+  }
   if (o.json) {
     nlohmann::json backends = nlohmann::json::array();
-    for (const auto& name : reg.names()) {
-      const auto& e = reg.get(name);
-      nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
-      for (const auto& s : e.params) params.push_back(spec_json(s));
-      for (const auto& s : e.device_params) device.push_back(spec_json(s));
-      backends.push_back({{"name", e.name},
-                          {"description", e.description},
-                          {"lossless", e.lossless},
-                          {"origin", e.origin},
-                          {"parameters", params},
-                          {"device_parameters", device}});
-    }
+    for (const auto& name : reg.names()) backends.push_back(backend_json(reg.get(name)));
     nlohmann::json shared = nlohmann::json::array();
-    for (const auto& s : shared_param_specs()) shared.push_back(spec_json(s));
+    for (const auto& s : shared_param_specs()) shared.push_back(param_spec_json(s));
     print_json({{"backends", backends}, {"shared_parameters", shared}});
     return;
   }
@@ -67,6 +51,8 @@ void run_list(const ListCli& o) {
     std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "",
                 e.description.c_str());
     if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
+    std::printf("    output basis %s, size knob %s\n",
+                std::string(to_string(e.output_basis)).c_str(), size_knob_summary(e).c_str());
     for (const auto& s : e.params)
       std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
                   std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
@@ -218,6 +204,9 @@ void add_backend_commands(CLI::App& app) {
   auto* l =
       app.add_subcommand("list", "List the registered compressor backends and their parameters");
   l->add_flag("--json", lo->json, "Machine-readable output (docs/cli.md)");
+  l->add_option("--markdown", lo->markdown,
+                "Print the parameter block of this backend's README "
+                "(scripts/gen_backend_docs.py)");
   l->callback([lo] { run_list(*lo); });
 
   auto co = std::make_shared<CompressCli>();

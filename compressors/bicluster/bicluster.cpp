@@ -556,6 +556,12 @@ CompressorEntry registry_entry() {
        "lossy mode: relative L1 error budget E per light (0 = lossless); drops biclusters and "
        "residual terms while every column loses at most E of its L1 mass"},
   };
+  // Narrowed to the lossy budgets: E = 0 is the lossless point, and a log sweep needs E > 0.
+  e.size_knob = SizeKnob{.key = "error",
+                         .direction = SizeKnob::Direction::kLargerIsLessStorage,
+                         .min = 1e-3,
+                         .max = 1.0,
+                         .scale = SizeKnob::Scale::kLog};
   e.device_params = {
       {"opencl_ids",
        ParamType::kEnum,

@@ -363,6 +363,9 @@ prt::CompressorEntry entry() {
                .choices = {},
                .doc = "quantisation levels per row: 2^bits - 1; rows whose counts fit are stored "
                       "exactly, others are rounded (entries rounding to 0 are dropped)"}};
+  // More bits drop fewer entries (an entry is dropped when 2 c levels < cmax).
+  e.size_knob =
+      prt::SizeKnob{.key = "bits", .direction = prt::SizeKnob::Direction::kLargerIsMoreStorage};
   e.lossless = false;  // bits < 8 may round; declared_error_bound() says how much
   e.create = [](const prt::ParamSet& p) {
     return std::make_unique<Quantized8Compressor>(static_cast<int>(p.get_int("bits")));

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <map>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "prtlab/storage/data_paths.h"
 #include "support/cli_runner.h"
@@ -109,6 +111,44 @@ TEST_F(BackendCli, ListAndDevices) {
   const auto strict = run("--device no-such-device --strict-device devices");
   EXPECT_EQ(strict.exit_code, 1);
   EXPECT_NE(strict.err.find("no-such-device"), std::string::npos) << strict.err;
+}
+
+// What a harness reads to sweep any backend: inputs, output basis and size knob, per backend.
+TEST_F(BackendCli, ListShowsInputsOutputBasisAndSizeKnob) {
+  const auto r = run_cli("list --json", dir_, env_, PRTLAB_TEST_CLI_PATH);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto list = nlohmann::json::parse(r.out);
+  std::map<std::string, nlohmann::json> by_name;
+  for (const auto& b : list["backends"]) by_name[b["name"].get<std::string>()] = b;
+  ASSERT_TRUE(by_name.contains("bicluster") && by_name.contains("uncompressed") &&
+              by_name.contains("coo") && by_name.contains("sh_probe"))
+      << r.out;
+  for (const auto& [name, b] : by_name) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(b.contains("inputs") && b.contains("output_basis") && b.contains("size_knob"));
+    EXPECT_TRUE(b["inputs"]["sh_order"].is_number_integer());
+    EXPECT_TRUE(b["inputs"]["mesh"].is_boolean());
+    EXPECT_TRUE(b["inputs"]["btfs"].is_boolean());
+    if (!b["size_knob"].is_null()) {
+      EXPECT_LT(b["size_knob"]["min"].get<double>(), b["size_knob"]["max"].get<double>());
+      bool declared = false;
+      for (const auto& p : b["parameters"]) declared |= p["key"] == b["size_knob"]["key"];
+      EXPECT_TRUE(declared) << "the knob names one of the backend's parameters";
+    }
+  }
+  EXPECT_TRUE(by_name["uncompressed"]["size_knob"].is_null());
+  EXPECT_EQ(by_name["uncompressed"]["output_basis"], "pixel");
+  const auto& bicluster = by_name["bicluster"]["size_knob"];
+  EXPECT_EQ(bicluster["key"], "error");
+  EXPECT_EQ(bicluster["direction"], "larger_is_less_storage");
+  EXPECT_EQ(bicluster["scale"], "log");
+  EXPECT_EQ(by_name["coo"]["size_knob"]["key"], "keep");
+  EXPECT_EQ(by_name["coo"]["size_knob"]["direction"], "larger_is_more_storage");
+  EXPECT_EQ(by_name["coo"]["size_knob"]["min"].get<double>(), 0.0) << "the parameter's own range";
+  EXPECT_EQ(by_name["coo"]["size_knob"]["max"].get<double>(), 1.0);
+  EXPECT_EQ(by_name["sh_probe"]["output_basis"], "sh");
+  EXPECT_EQ(by_name["sh_probe"]["size_knob"]["key"], "order");
+  EXPECT_EQ(by_name["sh_probe"]["size_knob"]["direction"], "larger_is_more_storage");
 }
 
 }  // namespace

@@ -46,6 +46,8 @@ void CompressorRegistry::add(CompressorEntry entry) {
             fmt::format("compressor registry: '{}' declares '{}' both as a parameter and "
                         "as a device option",
                         entry.name, d.key));
+  if (entry.size_knob)
+    entry.size_knob = resolve_size_knob(entry.name, *entry.size_knob, entry.params);
   auto name = entry.name;
   entries_.emplace(std::move(name), std::move(entry));
 }

@@ -150,6 +150,7 @@ CompressorEntry registry_entry() {
                1.0,
                {},
                "fraction of each row's entries kept, largest first (1 = lossless)"}};
+  e.size_knob = SizeKnob{.key = "keep", .direction = SizeKnob::Direction::kLargerIsMoreStorage};
   e.lossless = true;
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     return std::make_unique<CooCompressor>(p.get_real("keep"));

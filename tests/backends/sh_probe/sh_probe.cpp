@@ -151,6 +151,8 @@ CompressorEntry registry_entry() {
       "test-only: exact L* projected onto SH per vertex (least squares over the cell "
       "integrals), proving a non-pixel output basis is accepted everywhere";
   e.params = {{"order", ParamType::kInt, "3", 1.0, 5.0, {}, "SH order n (n^2 coefficients)"}};
+  e.output_basis = RadianceBasis::kSphericalHarmonics;
+  e.size_knob = SizeKnob{.key = "order", .direction = SizeKnob::Direction::kLargerIsMoreStorage};
   e.lossless = false;
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     return std::make_unique<ShProbeCompressor>(static_cast<int>(p.get_int("order")));

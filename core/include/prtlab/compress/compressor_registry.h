@@ -11,12 +11,15 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/params.h"
 #include "prtlab/compress/plugin.h"
+#include "prtlab/compress/size_knob.h"
+#include "prtlab/transfer/local_radiance.h"
 
 namespace prt {
 
@@ -39,6 +42,12 @@ struct CompressorEntry {
   /// checks every combination of their choices against the C++ relight.
   std::vector<ParamSpec> device_params;
   BackendInputs inputs;  ///< what compress() reads from TransferInput besides T
+  /// The basis every compressed result of this backend relights into (output_basis()), known
+  /// before compressing so that callers size and shade without a result in hand.
+  RadianceBasis output_basis = RadianceBasis::kPixel;
+  /// The parameter that trades storage against error; none for a fixed-size backend. The
+  /// registry validates it against `params` and fills in its range (resolve_size_knob()).
+  std::optional<SizeKnob> size_knob;
   bool lossless =
       false;  ///< at default parameters, relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
@@ -53,7 +62,8 @@ class CompressorRegistry {
  public:
   static CompressorRegistry& instance();
 
-  /// Throws when the name is taken or the entry is incomplete.
+  /// Throws when the name is taken or the entry is incomplete; a ParameterError when its
+  /// size knob does not fit its parameters.
   void add(CompressorEntry entry);
   bool contains(const std::string& name) const { return entries_.contains(name); }
   const CompressorEntry& get(const std::string& name) const;  ///< throws, listing known names
