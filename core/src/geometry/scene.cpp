@@ -209,12 +209,15 @@ bool glob_match(std::string_view pattern, std::string_view name) {
 /// One model file cut into parts by group: loaded once, and which part took each group.
 struct GroupedSource {
   GroupedMesh loaded;
-  std::vector<std::string> owner;  ///< per group: the part that selected it, "" for none
+  std::vector<int> owner;  ///< per group: the index of the part that selected it, -1 for none
 };
 
 /// The ids of the groups `part` selects; every pattern must match a group no other part has.
-std::vector<std::uint16_t> select_groups(const fs::path& scene_file, const ScenePart& part,
+std::vector<std::uint16_t> select_groups(const SceneDesc& desc, std::size_t part_index,
                                          const fs::path& mesh_file, GroupedSource& source) {
+  const fs::path& scene_file = desc.file;
+  const ScenePart& part = desc.parts[part_index];
+  const int self = static_cast<int>(part_index);
   const std::vector<std::string>& names = source.loaded.groups;
   std::vector<std::uint16_t> ids;
   for (const std::string& pattern : part.groups) {
@@ -222,14 +225,14 @@ std::vector<std::uint16_t> select_groups(const fs::path& scene_file, const Scene
     for (std::size_t g = 0; g < names.size(); ++g) {
       if (!glob_match(pattern, names[g])) continue;
       matched = true;
-      if (source.owner[g] == part.name) continue;  // two patterns of this part
-      if (!source.owner[g].empty())
-        throw InputError(
-            scene_file,
-            fmt::format("part '{}': group '{}' of {} already belongs to part '{}' "
-                        "(a group can be in one part only)",
-                        part.name, names[g], mesh_file.filename().string(), source.owner[g]));
-      source.owner[g] = part.name;
+      if (source.owner[g] == self) continue;  // two patterns of this part
+      if (source.owner[g] >= 0)
+        throw InputError(scene_file,
+                         fmt::format("part '{}': group '{}' of {} already belongs to part '{}' "
+                                     "(a group can be in one part only)",
+                                     part.name, names[g], mesh_file.filename().string(),
+                                     desc.parts[static_cast<std::size_t>(source.owner[g])].name));
+      source.owner[g] = self;
       ids.push_back(static_cast<std::uint16_t>(g));
     }
     if (!matched) {
@@ -463,9 +466,9 @@ Scene build_scene(const SceneDesc& desc) {
         GroupedSource& source = it->second;
         if (inserted) {
           source.loaded = load_mesh_groups(file, part.group_by);
-          source.owner.assign(source.loaded.groups.size(), "");
+          source.owner.assign(source.loaded.groups.size(), -1);
         }
-        const std::vector<std::uint16_t> ids = select_groups(desc.file, part, file, source);
+        const std::vector<std::uint16_t> ids = select_groups(desc, i, file, source);
         // Exports split vertices at every UV seam and hard edge; per-vertex transfer wants one
         // vertex per surface point, so weld by position unless the file's UVs are kept.
         const bool keep_uvs = part.uv_mapping == UvMapping::kMesh;
@@ -518,7 +521,7 @@ Scene build_scene(const SceneDesc& desc) {
   }
   for (const auto& [key, source] : grouped) {
     std::size_t unused = 0;
-    for (const std::string& owner : source.owner) unused += owner.empty() ? 1 : 0;
+    for (const int owner : source.owner) unused += owner < 0 ? 1 : 0;
     if (unused > 0)
       log_info("{}: {} of its {} groups are in no part (left out)", key.first.string(), unused,
                source.owner.size());
