@@ -125,15 +125,17 @@ TEST(PaperScenes, VertexCounts) {
   struct Case {
     const char* scene;
     std::size_t paper_vertices;
-    bool needs_data;
+    const char* data_mesh;  ///< the data-cache mesh the scene needs, or nullptr
   };
-  const Case cases[] = {{"tiny-sphere-plane", 320, false},
-                        {"chair", 16101, false},
-                        {"temple", 32409, false},
-                        {"bunny", 3286, true},
-                        {"armor", 10652, true}};
+  const Case cases[] = {{"tiny-sphere-plane", 320, nullptr},
+                        {"chair-procedural", 16101, nullptr},
+                        {"temple-procedural", 32409, nullptr},
+                        {"chair", 16101, "oakChair.obj"},
+                        {"temple", 32409, "samurai_monastry.obj"},
+                        {"bunny", 3286, "bunny00.off"},
+                        {"armor", 10652, "armadillo.off"}};
   for (const auto& c : cases) {
-    if (c.needs_data && !fs::exists(data_dir() / "meshes" / "bunny00.off")) {
+    if (c.data_mesh && !fs::exists(data_dir() / "meshes" / c.data_mesh)) {
       std::printf("skipping %s: data cache missing (run scripts/setup.sh --data)\n", c.scene);
       continue;
     }

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -18,9 +19,9 @@
 #include <system_error>
 #include <vector>
 
-#include "prtlab/storage/atomic_file.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/storage/atomic_file.h"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -401,6 +402,7 @@ void check_raw_scene(const fs::path& file, const aiScene& scene) {
 struct Piece {
   const aiMesh* mesh;
   aiMatrix4x4 transform;
+  const aiNode* node = nullptr;
 };
 
 void collect_pieces(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent,
@@ -408,12 +410,27 @@ void collect_pieces(const aiScene& scene, const aiNode& node, const aiMatrix4x4&
   if (depth > 256) return;  // malformed, cyclic node graphs
   const aiMatrix4x4 xf = parent * node.mTransformation;
   for (unsigned i = 0; i < node.mNumMeshes; ++i)
-    if (node.mMeshes[i] < scene.mNumMeshes) out.push_back({scene.mMeshes[node.mMeshes[i]], xf});
+    if (node.mMeshes[i] < scene.mNumMeshes)
+      out.push_back({scene.mMeshes[node.mMeshes[i]], xf, &node});
   for (unsigned c = 0; c < node.mNumChildren; ++c)
     if (node.mChildren[c]) collect_pieces(scene, *node.mChildren[c], xf, out, depth + 1);
 }
 
-Mesh read_with_assimp(const fs::path& file) {
+std::string piece_group_name(const aiScene& scene, const Piece& piece, MeshGroupKey key) {
+  std::string name;
+  if (key == MeshGroupKey::kMaterial) {
+    if (piece.mesh->mMaterialIndex < scene.mNumMaterials)
+      name = scene.mMaterials[piece.mesh->mMaterialIndex]->GetName().C_Str();
+  } else {
+    if (piece.node) name = piece.node->mName.C_Str();
+    if (name.empty()) name = piece.mesh->mName.C_Str();
+  }
+  return name.empty() ? "(unnamed)" : name;
+}
+
+/// With `groups`, the triangles' part ids are their group indices and `groups` their names.
+Mesh read_with_assimp(const fs::path& file, MeshGroupKey key = MeshGroupKey::kMaterial,
+                      std::vector<std::string>* groups = nullptr) {
   Assimp::Importer importer;
   // Import without post-processing first: our checks must see the raw indices, since
   // post-processing steps index vertex arrays without bounds checks.
@@ -437,9 +454,25 @@ Mesh read_with_assimp(const fs::path& file) {
   for (const Piece& piece : pieces) any_uv = any_uv || piece.mesh->HasTextureCoords(0);
 
   Mesh out;
+  std::map<std::string, std::uint16_t> group_index;
   for (const Piece& piece : pieces) {
     const aiMesh& m = *piece.mesh;
     const std::size_t offset = out.positions.size();
+    std::uint16_t group = 0;
+    if (groups) {
+      const std::string name = piece_group_name(*scene, piece, key);
+      const auto it = group_index.find(name);
+      if (it != group_index.end()) {
+        group = it->second;
+      } else {
+        if (groups->size() > std::numeric_limits<std::uint16_t>::max())
+          throw InputError(file, fmt::format("more than {} groups",
+                                             std::numeric_limits<std::uint16_t>::max() + 1));
+        group = static_cast<std::uint16_t>(groups->size());
+        group_index.emplace(name, group);
+        groups->push_back(name);
+      }
+    }
     if (offset + m.mNumVertices > std::numeric_limits<std::uint32_t>::max())
       throw InputError(file, "too many vertices for 32-bit indices");
     const bool identity = piece.transform.IsIdentity();
@@ -466,6 +499,7 @@ Mesh read_with_assimp(const fs::path& file) {
           out.indices.insert(out.indices.end(), {at(0), at(k), at(k + 1)});
       }
     }
+    if (groups) out.triangle_part.resize(out.triangle_count(), group);
   }
   return out;
 }
@@ -577,6 +611,26 @@ void validate_mesh(Mesh& mesh, const fs::path& source, MeshLoadReport* report) {
     report->first_degenerate = first;
     report->unused_vertices_removed = unused;
   }
+}
+
+GroupedMesh load_mesh_groups(const fs::path& file, MeshGroupKey key, MeshLoadReport* report) {
+  const std::string ext = lower_extension(file);
+  if (ext == ".off")
+    throw InputError(file, "an OFF file has no material or object groups to select from");
+  if (ext == ".obj") {
+    prescan_obj(file, read_whole_file(file));
+  } else {
+    std::error_code ec;
+    if (!fs::exists(file, ec)) throw InputError(file, "file not found");
+  }
+  GroupedMesh out;
+  out.mesh = read_with_assimp(file, key, &out.groups);
+  MeshLoadReport local;
+  validate_mesh(out.mesh, file, &local);
+  if (report) *report = local;
+  compute_smooth_normals(out.mesh);
+  compute_tangents(out.mesh);
+  return out;
 }
 
 Mesh load_mesh(const fs::path& file, MeshLoadReport* report) {

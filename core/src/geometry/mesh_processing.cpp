@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <span>
 #include <unordered_map>
 #include <utility>
 
@@ -545,7 +546,10 @@ void apply_transform(Mesh& mesh, const Transform& xf) {
 
 void normalize_to_unit_box(Mesh& mesh, bool on_ground) {
   if (mesh.positions.empty()) return;
-  const Aabb box = mesh.bounds();
+  normalize_to_unit_box(mesh, on_ground, mesh.bounds());
+}
+
+void normalize_to_unit_box(Mesh& mesh, bool on_ground, const Aabb& box) {
   const Vec3d lo(box.lo), hi(box.hi);
   const Vec3d extent = hi - lo;
   const double largest = std::max({extent.x, extent.y, extent.z});
@@ -558,6 +562,119 @@ void normalize_to_unit_box(Mesh& mesh, bool on_ground) {
     if (on_ground) q.y = (static_cast<double>(p.y) - lo.y) * s;
     p = Vec3(q);
   }
+}
+
+Mesh select_parts(const Mesh& mesh, std::span<const std::uint16_t> parts) {
+  std::vector<std::uint8_t> wanted;
+  for (std::uint16_t p : parts) {
+    if (p >= wanted.size()) wanted.resize(std::size_t{p} + 1, 0);
+    wanted[p] = 1;
+  }
+  std::vector<std::uint32_t> indices;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const std::uint16_t p = mesh.part_of(t);
+    if (p < wanted.size() && wanted[p])
+      indices.insert(indices.end(), mesh.indices.begin() + static_cast<std::ptrdiff_t>(3 * t),
+                     mesh.indices.begin() + static_cast<std::ptrdiff_t>(3 * t + 3));
+  }
+  return compact_vertices(mesh, std::move(indices), {});
+}
+
+std::size_t orient_consistently(Mesh& mesh) {
+  const std::size_t T = mesh.triangle_count();
+  if (T == 0) return 0;
+  // Seam copies of a vertex are one vertex here: a UV seam must not cut a component in two.
+  const std::vector<std::uint32_t> rep = position_representatives(mesh);
+  const auto corner = [&](std::size_t t, int c) {
+    return rep[mesh.indices[3 * t + static_cast<std::size_t>(c)]];
+  };
+  struct EdgeUse {
+    std::uint32_t count = 0;
+    std::uint32_t triangle[2] = {0, 0};
+    bool forward[2] = {false, false};  ///< the triangle runs the edge from its lower end
+  };
+  std::unordered_map<std::uint64_t, EdgeUse> edges;
+  edges.reserve(3 * T / 2 + 16);
+  for (std::size_t t = 0; t < T; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = corner(t, k), b = corner(t, (k + 1) % 3);
+      if (a == b) continue;
+      EdgeUse& e = edges[edge_key(a, b)];
+      if (e.count < 2) {
+        e.triangle[e.count] = static_cast<std::uint32_t>(t);
+        e.forward[e.count] = a < b;
+      }
+      ++e.count;
+    }
+  }
+  const auto area = [&](std::size_t t) {
+    const Vec3d a(mesh.positions[mesh.indices[3 * t]]);
+    return glm::length(glm::cross(Vec3d(mesh.positions[mesh.indices[3 * t + 1]]) - a,
+                                  Vec3d(mesh.positions[mesh.indices[3 * t + 2]]) - a));
+  };
+  const auto signed_volume = [&](std::size_t t) {
+    return glm::dot(Vec3d(mesh.positions[mesh.indices[3 * t]]),
+                    glm::cross(Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
+                               Vec3d(mesh.positions[mesh.indices[3 * t + 2]])));
+  };
+
+  std::vector<std::int8_t> flip(T, -1);  // -1: not reached yet
+  std::vector<std::uint32_t> component, stack;
+  std::size_t flipped = 0;
+  for (std::size_t seed = 0; seed < T; ++seed) {
+    if (flip[seed] >= 0) continue;
+    // Grow the component over manifold edges only: across an edge of three or more triangles
+    // "consistent" has no meaning, and a boundary edge has no neighbour.
+    component.clear();
+    stack.assign(1, static_cast<std::uint32_t>(seed));
+    flip[seed] = 0;
+    bool closed = true;
+    while (!stack.empty()) {
+      const std::uint32_t t = stack.back();
+      stack.pop_back();
+      component.push_back(t);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = corner(t, k), b = corner(t, (k + 1) % 3);
+        if (a == b) continue;
+        const EdgeUse& e = edges.at(edge_key(a, b));
+        if (e.count != 2) {
+          closed = false;
+          continue;
+        }
+        const int self = e.triangle[0] == t ? 0 : 1;
+        const std::uint32_t u = e.triangle[1 - self];
+        // Consistent neighbours run their shared edge in opposite directions.
+        const bool same_direction = e.forward[0] == e.forward[1];
+        const auto want = static_cast<std::int8_t>(flip[t] ^ (same_direction ? 1 : 0));
+        if (flip[u] < 0) {
+          flip[u] = want;
+          stack.push_back(u);
+        }
+        // A conflict (a non-orientable surface) keeps the first assignment.
+      }
+    }
+    // Keep the orientation most of the component's area already has; a closed component must
+    // then enclose positive volume (face outwards).
+    double keep = 0.0, change = 0.0, volume = 0.0;
+    for (std::uint32_t t : component) {
+      (flip[t] ? change : keep) += area(t);
+      volume += flip[t] ? -signed_volume(t) : signed_volume(t);
+    }
+    bool invert = change > keep;
+    if (closed && (invert ? -volume : volume) < 0.0) invert = !invert;
+    for (std::uint32_t t : component) {
+      if (invert) flip[t] = static_cast<std::int8_t>(1 - flip[t]);
+      if (flip[t]) {
+        std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
+        ++flipped;
+      }
+    }
+  }
+  if (flipped > 0) {
+    if (!mesh.normals.empty()) compute_smooth_normals(mesh);
+    if (!mesh.tangents.empty()) compute_tangents(mesh);
+  }
+  return flipped;
 }
 
 }  // namespace prt

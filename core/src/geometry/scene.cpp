@@ -5,14 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
+#include <utility>
 
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/geometry/mesh_io.h"
 #include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/geometry/uv_mapping.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -143,7 +145,7 @@ Mesh make_procedural(const fs::path& file, const ScenePart& part, const std::str
 /// mesh lands slightly above the target; a last, small decimation of the charted mesh (a few
 /// interior collapses, which keep the planar UVs exact) removes the rest.
 Mesh resample_with_generated_uvs(const Mesh& source, std::optional<std::size_t> target,
-                                 const std::string& part_name) {
+                                 const std::string& part_name, bool smooth) {
   UvAtlasReport report;
   if (!target) {
     Mesh out = generate_uvs(source, {}, &report);
@@ -157,9 +159,15 @@ Mesh resample_with_generated_uvs(const Mesh& source, std::optional<std::size_t> 
   Mesh above;                 // the smallest charted mesh at or above the target so far
   for (int iter = 0; iter < 8; ++iter) {
     const auto base_count = static_cast<std::size_t>(std::max(4.0, std::round(base)));
-    Mesh charted = generate_uvs(
-        base_count == source.vertex_count() ? source : resample_to_vertex_count(source, base_count),
-        {}, &report);
+    // The base count is only an aim (the last decimation lands on the target), so it may be
+    // missed by a little: fragmented models (many small open pieces, whose borders edge
+    // collapse keeps) cannot always be decimated to an exact count.
+    constexpr double kBaseTolerance = 0.02;
+    Mesh charted =
+        generate_uvs(base_count == source.vertex_count()
+                         ? source
+                         : resample_to_vertex_count(source, base_count, kBaseTolerance, smooth),
+                     {}, &report);
     const double got = static_cast<double>(charted.vertex_count());
     log_debug("part '{}': resampled to {}, {} charts, {} vertices with seams (target {})",
               part_name, base_count, report.charts, got, want);
@@ -176,6 +184,70 @@ Mesh resample_with_generated_uvs(const Mesh& source, std::optional<std::size_t> 
                     part_name, *target, source.vertex_count()));
   if (above.vertex_count() == *target) return above;
   return decimate_to_vertex_count(above, *target);
+}
+
+/// Shell-style match: `*` any run of characters, `?` one character, everything else literal.
+bool glob_match(std::string_view pattern, std::string_view name) {
+  std::size_t p = 0, n = 0, star = std::string_view::npos, resume = 0;
+  while (n < name.size()) {
+    if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n])) {
+      ++p, ++n;
+    } else if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      resume = n;
+    } else if (star != std::string_view::npos) {
+      p = star + 1;
+      n = ++resume;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*') ++p;
+  return p == pattern.size();
+}
+
+/// One model file cut into parts by group: loaded once, and which part took each group.
+struct GroupedSource {
+  GroupedMesh loaded;
+  std::vector<int> owner;  ///< per group: the index of the part that selected it, -1 for none
+};
+
+/// The ids of the groups `part` selects; every pattern must match a group no other part has.
+std::vector<std::uint16_t> select_groups(const SceneDesc& desc, std::size_t part_index,
+                                         const fs::path& mesh_file, GroupedSource& source) {
+  const fs::path& scene_file = desc.file;
+  const ScenePart& part = desc.parts[part_index];
+  const int self = static_cast<int>(part_index);
+  const std::vector<std::string>& names = source.loaded.groups;
+  std::vector<std::uint16_t> ids;
+  for (const std::string& pattern : part.groups) {
+    bool matched = false;
+    for (std::size_t g = 0; g < names.size(); ++g) {
+      if (!glob_match(pattern, names[g])) continue;
+      matched = true;
+      if (source.owner[g] == self) continue;  // two patterns of this part
+      if (source.owner[g] >= 0)
+        throw InputError(scene_file,
+                         fmt::format("part '{}': group '{}' of {} already belongs to part '{}' "
+                                     "(a group can be in one part only)",
+                                     part.name, names[g], mesh_file.filename().string(),
+                                     desc.parts[static_cast<std::size_t>(source.owner[g])].name));
+      source.owner[g] = self;
+      ids.push_back(static_cast<std::uint16_t>(g));
+    }
+    if (!matched) {
+      std::string known;
+      for (std::size_t g = 0; g < names.size() && g < 40; ++g)
+        known += (known.empty() ? "" : ", ") + names[g];
+      if (names.size() > 40) known += fmt::format(", ... ({} in all)", names.size());
+      throw InputError(scene_file,
+                       fmt::format("part '{}': {} has no {} group matching '{}' (its groups: {})",
+                                   part.name, mesh_file.string(),
+                                   part.group_by == MeshGroupKey::kMaterial ? "material" : "object",
+                                   pattern, known));
+    }
+  }
+  return ids;
 }
 
 }  // namespace
@@ -220,10 +292,11 @@ SceneDesc parse_scene(const fs::path& file) {
   for (const auto& node : *parts) {
     const auto* t = node.as_table();
     if (!t) throw InputError(file, "each [[part]] must be a table");
-    reject_unknown_keys(file, *t,
-                        {"name", "mesh", "btf", "uv_scale", "uv_mapping", "target_vertices",
-                         "transform", "normalize", "params", "instance"},
-                        "a [[part]]");
+    reject_unknown_keys(
+        file, *t,
+        {"name", "mesh", "btf", "uv_scale", "uv_mapping", "target_vertices", "subdivision",
+         "groups", "group_by", "transform", "normalize", "params", "instance"},
+        "a [[part]]");
     const toml::node_view<const toml::node> p{*t};
     ScenePart part;
     part.name = optional_value<std::string>(file, p["name"], "name")
@@ -264,6 +337,41 @@ SceneDesc parse_scene(const fs::path& file) {
             file, fmt::format("part '{}': target_vertices = {} is too small", part.name, *tv));
       part.target_vertices = static_cast<std::size_t>(*tv);
     }
+    const std::string subdivision =
+        optional_value<std::string>(file, p["subdivision"], "subdivision").value_or("loop");
+    if (subdivision != "loop" && subdivision != "linear")
+      throw InputError(file, fmt::format("part '{}': subdivision = '{}' (valid: loop, linear)",
+                                         part.name, subdivision));
+    part.smooth_subdivision = subdivision == "loop";
+    if (p["groups"]) {
+      const auto* arr = p["groups"].as_array();
+      if (!arr || arr->empty())
+        throw InputError(file, fmt::format("line {}: part '{}': groups must be a non-empty array "
+                                           "of group names",
+                                           p["groups"].node()->source().begin.line, part.name));
+      for (const auto& g : *arr) {
+        const auto name = g.value<std::string>();
+        if (!name || name->empty())
+          throw InputError(file, fmt::format("line {}: part '{}': groups must hold non-empty "
+                                             "strings",
+                                             g.source().begin.line, part.name));
+        part.groups.push_back(*name);
+      }
+    }
+    if (const auto by = optional_value<std::string>(file, p["group_by"], "group_by")) {
+      if (part.groups.empty())
+        throw InputError(file, fmt::format("part '{}': group_by needs groups = [...]", part.name));
+      if (*by == "material")
+        part.group_by = MeshGroupKey::kMaterial;
+      else if (*by == "object")
+        part.group_by = MeshGroupKey::kObject;
+      else
+        throw InputError(file, fmt::format("part '{}': group_by = '{}' (valid: material, object)",
+                                           part.name, *by));
+    }
+    if (!part.groups.empty() && part.mesh.starts_with("procedural:"))
+      throw InputError(file, fmt::format("part '{}': groups are for mesh files; {} has none",
+                                         part.name, part.mesh));
     if (const auto* xf = (*t)["transform"].as_table()) {
       reject_unknown_keys(file, *xf, {"scale", "rotate_deg", "translate"}, "a part's transform");
       const toml::node_view<const toml::node> x{*xf};
@@ -338,9 +446,11 @@ SceneDesc parse_scene(const fs::path& file) {
 Scene build_scene(const SceneDesc& desc) {
   Scene scene;
   scene.desc = desc;
+  std::map<std::pair<fs::path, MeshGroupKey>, GroupedSource> grouped;
   for (std::size_t i = 0; i < desc.parts.size(); ++i) {
     const ScenePart& part = desc.parts[i];
     Mesh m;
+    std::optional<Aabb> normalize_box;
     constexpr std::string_view kProcedural = "procedural:";
     if (part.mesh.starts_with(kProcedural)) {
       m = make_procedural(desc.file, part, part.mesh.substr(kProcedural.size()));
@@ -348,7 +458,27 @@ Scene build_scene(const SceneDesc& desc) {
       if (!part.params.empty())
         throw InputError(
             desc.file, fmt::format("part '{}': params are only for procedural meshes", part.name));
-      m = load_mesh(resolve_mesh(part.mesh));
+      const fs::path file = resolve_mesh(part.mesh);
+      if (part.groups.empty()) {
+        m = load_mesh(file);
+      } else {
+        auto [it, inserted] = grouped.try_emplace({file, part.group_by});
+        GroupedSource& source = it->second;
+        if (inserted) {
+          source.loaded = load_mesh_groups(file, part.group_by);
+          source.owner.assign(source.loaded.groups.size(), -1);
+        }
+        const std::vector<std::uint16_t> ids = select_groups(desc, i, file, source);
+        // Exports split vertices at every UV seam and hard edge; per-vertex transfer wants one
+        // vertex per surface point, so weld by position unless the file's UVs are kept.
+        const bool keep_uvs = part.uv_mapping == UvMapping::kMesh;
+        m = weld_vertices(select_parts(source.loaded.mesh, ids),
+                          keep_uvs ? WeldKey::kPositionAndUv : WeldKey::kPosition);
+        const std::size_t flipped = orient_consistently(m);
+        log_debug("part '{}': {} groups, {} vertices after welding, {} triangles flipped",
+                  part.name, ids.size(), m.vertex_count(), flipped);
+        normalize_box = source.loaded.mesh.bounds();
+      }
     }
     auto target = part.target_vertices;
     if (!target && desc.target_vertices) target = desc.target_vertices;
@@ -358,11 +488,16 @@ Scene build_scene(const SceneDesc& desc) {
                                               part.name, part.mesh));
     if (part.uv_mapping == UvMapping::kPlanar ||
         (part.uv_mapping == UvMapping::kAuto && !m.has_uvs())) {
-      m = resample_with_generated_uvs(m, target, part.name);
+      m = resample_with_generated_uvs(m, target, part.name, part.smooth_subdivision);
     } else if (target && *target != m.vertex_count()) {
-      m = resample_to_vertex_count(m, *target);
+      m = resample_to_vertex_count(m, *target, 0.002, part.smooth_subdivision);
     }
-    if (part.normalize) normalize_to_unit_box(m, /*on_ground=*/true);
+    if (part.normalize) {
+      if (normalize_box)
+        normalize_to_unit_box(m, /*on_ground=*/true, *normalize_box);
+      else
+        normalize_to_unit_box(m, /*on_ground=*/true);
+    }
     apply_transform(m, part.transform);
     if (part.uv_scale != 1.0 || part.uv_scale_v != 1.0)
       for (auto& uv : m.uvs)
@@ -383,6 +518,13 @@ Scene build_scene(const SceneDesc& desc) {
         scene.mesh.append(copy, static_cast<std::uint16_t>(i));
       }
     }
+  }
+  for (const auto& [key, source] : grouped) {
+    std::size_t unused = 0;
+    for (const int owner : source.owner) unused += owner < 0 ? 1 : 0;
+    if (unused > 0)
+      log_info("{}: {} of its {} groups are in no part (left out)", key.first.string(), unused,
+               source.owner.size());
   }
   return scene;
 }

@@ -12,6 +12,8 @@
 // removed; UVs come from the first texture channel where present. Normals in the file are
 // not used: the loaded mesh gets smooth normals and tangents (mesh.h).
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "prtlab/geometry/mesh.h"
 
@@ -24,6 +26,22 @@ struct MeshLoadReport {
 };
 
 Mesh load_mesh(const std::filesystem::path& file, MeshLoadReport* report = nullptr);
+
+/// What names a group of triangles in a mesh file: the material (OBJ `usemtl`) or the object
+/// (OBJ `o` / `g`; assimp's node of the mesh).
+enum class MeshGroupKey { kMaterial, kObject };
+
+struct GroupedMesh {
+  Mesh mesh;                        ///< triangle_part[t]: index of triangle t's group in `groups`
+  std::vector<std::string> groups;  ///< distinct names, in the order the file first uses them
+};
+
+/// load_mesh, keeping which group every triangle came from (for scene parts that split one
+/// file by material or object). Pieces with the same name form one group; a piece without a
+/// name is called "(unnamed)". InputError for an OFF file (it has no groups) and for more
+/// than 65,536 groups.
+GroupedMesh load_mesh_groups(const std::filesystem::path& file, MeshGroupKey key,
+                             MeshLoadReport* report = nullptr);
 
 /// Validate an in-memory mesh with the same rules (drops degenerate triangles with one
 /// warning, removes unused vertices); `source` names it in messages.

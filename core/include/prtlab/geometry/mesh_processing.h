@@ -3,6 +3,8 @@
 // above the source's. Both keep UVs and part ids; normals and tangents are recomputed.
 // Also welding, affine transforms and normalisation into the unit box.
 #include <cstddef>
+#include <cstdint>
+#include <span>
 
 #include "prtlab/geometry/mesh.h"
 
@@ -57,5 +59,23 @@ void apply_transform(Mesh& mesh, const Transform& xf);
 /// Scale and translate so the bounding box is centred at the origin with the largest extent 1
 /// ... then lying on y = 0 when `on_ground`. Throws ParameterError for a mesh of zero extent.
 void normalize_to_unit_box(Mesh& mesh, bool on_ground);
+/// The same map, computed from `box` instead of the mesh's own bounds: pieces cut from one
+/// model and normalised by the model's box keep their places relative to each other.
+void normalize_to_unit_box(Mesh& mesh, bool on_ground, const Aabb& box);
+
+/// The triangles whose part id is in `parts`, with the vertices they use (in their order) and
+/// those vertices' UVs; the result is a single part (triangle_part empty). Normals and
+/// tangents are dropped: a vertex on the cut would keep a normal smoothed over triangles it
+/// no longer has.
+Mesh select_parts(const Mesh& mesh, std::span<const std::uint16_t> parts);
+
+/// Makes neighbouring triangles agree on their winding: within every component connected
+/// over manifold edges (edges of exactly two triangles; vertices at one position count as
+/// one), the triangles are flipped to the orientation that most of the component's area
+/// already has, and a closed component is then turned to face outwards (positive enclosed
+/// volume). Exported meshes often carry a few flipped faces, whose normals would cancel their
+/// neighbours' in the smooth vertex normals. Returns the number of triangles flipped; normals
+/// and tangents are recomputed when the mesh had them and anything changed.
+std::size_t orient_consistently(Mesh& mesh);
 
 }  // namespace prt

@@ -15,6 +15,10 @@
 //   uv_mapping = "auto"      # "mesh" (the file's UVs), "planar" (generated), "auto": mesh
 //                            # UVs where the file has them, otherwise generated
 //   target_vertices = 3286   # optional, per part
+//   subdivision = "loop"     # or "linear": how resampling subdivides (when the target is above
+//                            # the mesh's count); "linear" keeps flat faces and sharp edges
+//   groups = ["Seat*", "Back"]  # optional: only these groups of the mesh file (names or
+//   group_by = "material"    # patterns with * and ?), by "material" (default) or "object"
 //   transform = { scale = [1,1,1], rotate_deg = [0,0,0], translate = [0,0,0] }
 //   normalize = true         # fit into the unit box resting on y = 0 before the transform
 //   [part.params]            # procedural shape parameters
@@ -36,6 +40,12 @@
 // the decimation); their seam copies count towards target_vertices: the decimation target is
 // lowered until the part, seams included, has the target count (within 0.2%).
 //
+// Parts with `groups` cut one model into parts: the file is loaded once per scene, every
+// pattern must match at least one of its groups, and no group may belong to two parts. Such
+// a part is welded by position (by position and UV with uv_mapping = "mesh") and its winding
+// made consistent (orient_consistently) before resampling; `normalize` then uses the whole
+// file's bounding box, so the parts stay where the model has them.
+//
 // Unknown keys are an error that lists the valid ones (a typo is never a silent default).
 #include <cstdint>
 #include <filesystem>
@@ -47,6 +57,7 @@
 
 #include "prtlab/geometry/camera.h"
 #include "prtlab/geometry/mesh.h"
+#include "prtlab/geometry/mesh_io.h"
 #include "prtlab/geometry/mesh_processing.h"
 
 namespace prt {
@@ -65,6 +76,9 @@ struct ScenePart {
   double uv_scale_v = 1.0;  ///< v scale; equal to uv_scale when a single number is given
   UvMapping uv_mapping = UvMapping::kAuto;
   std::optional<std::size_t> target_vertices;
+  bool smooth_subdivision = true;   ///< subdivision = "loop" (true) or "linear"
+  std::vector<std::string> groups;  ///< group names or patterns; empty: the whole file
+  MeshGroupKey group_by = MeshGroupKey::kMaterial;
   Transform transform;
   bool normalize = false;
   std::map<std::string, double> params;  ///< procedural shape parameters
