@@ -171,8 +171,12 @@ std::vector<std::string> table_notes(const TableResult& result) {
         paper_per_vertex > r.pixel_count / 2
             ? "The paper's count per vertex exceeds a hemisphere, so it keeps some below-horizon "
               "directions (docs/transfer.md, \"nnz vs the paper\")."
-            : "The paper's model is less open to the sky than ours (the count per vertex is "
-              "the visible fraction of the hemisphere: different geometry, different "
+        : ours_per_vertex > paper_per_vertex
+            ? "The paper's model is less open to the sky than ours (the count per vertex "
+              "is the visible fraction of the hemisphere: different geometry, different "
+              "self-occlusion)."
+            : "Our model is less open to the sky than the paper's (the count per vertex "
+              "is the visible fraction of the hemisphere: different geometry, different "
               "self-occlusion).",
         static_cast<double>(r.vertices) != p.vertices
             ? fmt::format(" with {} vertices vs the paper's {}", thousands(r.vertices),
