@@ -304,7 +304,7 @@ std::string render_markdown(const TableResult& result) {
        [](auto& r) { return fixed(r.reference_timing.ms_opencl, 2); }, nullptr},
       {"Error vs exact (max rel. L2)",
        [](auto& r) { return fmt::format("{:.1e}", r.rel_l2_error_max); }, nullptr},
-      {"Frobenius error ||T~ - T|| / ||T||",
+      {"Frobenius error ‖T~ − T‖ / ‖T‖",
        [](auto& r) { return fmt::format("{:.1e}", r.frobenius_rel_error); }, nullptr},
       {"Lossless", [](auto& r) { return r.lossless.verdict(); }, nullptr},
       {"Avg. FPS view/light",

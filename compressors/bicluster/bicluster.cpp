@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <span>
 
 #include "bicluster/bicluster_budget.h"
 #include "prtlab/base/error.h"
@@ -152,102 +153,143 @@ std::size_t BiclusterArrays::incidences() const {
   return n;
 }
 
-BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
-  BiclusterArrays a;
-  a.vertices = t.vertex_count();
-  a.local_count = t.local_count();
-  a.pixel_count = static_cast<int>(t.cols());
-  a.supersampling = t.supersampling();
-  const std::size_t rows = a.rows();
+namespace {
 
-  // Residual terms as 1x1 biclusters, after the biclusters. A position can be seeded as a
-  // residual term more than once (a later bicluster may leave a residual where an earlier seed
-  // was removed): consolidation sums them.
-  Biclustering c;
-  c.rows = b.rows;
-  c.cols = b.cols;
-  c.residual = b.residual;
-  consolidate_residual(c);
-  const std::size_t nb = b.biclusters.size() + c.residual.size();
-  PRT_CHECK(nb < std::numeric_limits<std::uint32_t>::max(), "{} biclusters exceed u32 ids", nb);
-  auto rows_of = [&](std::size_t i, auto&& visit) {
+// The items of a result: its biclusters, then its residual terms (consolidated) as 1x1
+// biclusters. A position can be seeded as a residual term more than once (a later bicluster may
+// leave a residual where an earlier seed was removed): consolidation sums them.
+struct PackItems {
+  const Biclustering& b;
+  Biclustering residual;
+
+  explicit PackItems(const Biclustering& result) : b(result) {
+    residual.rows = b.rows;
+    residual.cols = b.cols;
+    residual.residual = b.residual;
+    consolidate_residual(residual);
+  }
+  std::size_t count() const { return b.biclusters.size() + residual.residual.size(); }
+  const Term& term(std::size_t i) const { return residual.residual[i - b.biclusters.size()]; }
+  template <typename Visit>
+  void rows_of(std::size_t i, Visit&& visit) const {
     if (i < b.biclusters.size()) {
       for (std::uint32_t j : b.biclusters[i].rows) visit(j);
     } else {
-      visit(c.residual[i - b.biclusters.size()].row);
+      visit(term(i).row);
     }
-  };
-
-  // Per row, the (search-numbered) biclusters touching it.
-  std::vector<std::uint32_t> per_row(rows, 0);
-  for (std::size_t i = 0; i < nb; ++i) rows_of(i, [&](std::uint32_t j) { ++per_row[j]; });
-  const std::vector<std::uint32_t> row_off = offsets_from(per_row);
-  std::vector<std::uint32_t> row_ids(row_off.back());
-  {
-    std::vector<std::uint32_t> fill(row_off.begin(), row_off.end() - 1);
-    for (std::size_t i = 0; i < nb; ++i)
-      rows_of(i, [&](std::uint32_t j) { row_ids[fill[j]++] = static_cast<std::uint32_t>(i); });
   }
+  std::uint32_t size(std::size_t i) const {
+    return i < b.biclusters.size() ? static_cast<std::uint32_t>(b.biclusters[i].rows.size()) : 1;
+  }
+};
 
-  std::vector<std::uint32_t> sizes(nb);
-  for (std::size_t i = 0; i < nb; ++i)
-    sizes[i] =
-        i < b.biclusters.size() ? static_cast<std::uint32_t>(b.biclusters[i].rows.size()) : 1;
-  PRT_CHECK(rows < std::numeric_limits<std::uint32_t>::max(), "{} rows exceed u32 ids", rows);
-  const std::vector<std::uint32_t> order = phase2_row_order(rows, sizes, row_off, rows_of);
+// Per row, the ids of the items touching it (CSR: offsets per row + 1, ids).
+struct RowIncidence {
+  std::vector<std::uint32_t> offsets, ids;
+};
 
-  // Numbering by first use in phase 2's order, skipping the zero slots.
-  std::vector<std::uint32_t> renumber(nb, std::numeric_limits<std::uint32_t>::max());
+RowIncidence row_incidence(const PackItems& items, std::size_t rows) {
+  std::vector<std::uint32_t> per_row(rows, 0);
+  for (std::size_t i = 0; i < items.count(); ++i)
+    items.rows_of(i, [&](std::uint32_t j) { ++per_row[j]; });
+  RowIncidence inc;
+  inc.offsets = offsets_from(per_row);
+  inc.ids.resize(inc.offsets.back());
+  std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
+  for (std::size_t i = 0; i < items.count(); ++i)
+    items.rows_of(i, [&](std::uint32_t j) { inc.ids[fill[j]++] = static_cast<std::uint32_t>(i); });
+  return inc;
+}
+
+// Item ids by first use in phase 2's row order, skipping the zero slots (multiples of
+// kZeroStride). Rewrites `inc.ids` to the new ids, sorted within each row, and returns, per new
+// id, the item it stands for (kNoItem for a zero slot).
+constexpr auto kNoItem = std::numeric_limits<std::uint32_t>::max();
+
+std::vector<std::uint32_t> number_by_first_use(RowIncidence& inc, std::size_t items,
+                                               std::span<const std::uint32_t> order) {
+  std::vector<std::uint32_t> renumber(items, kNoItem);
   std::uint64_t next = 1;  // id 0 is the first zero slot
   std::size_t numbered = 0;
   for (std::uint32_t row : order) {
-    for (std::uint32_t q = row_off[row]; q < row_off[row + 1]; ++q) {
-      if (renumber[row_ids[q]] != std::numeric_limits<std::uint32_t>::max()) continue;
+    for (std::uint32_t q = inc.offsets[row]; q < inc.offsets[row + 1]; ++q) {
+      if (renumber[inc.ids[q]] != kNoItem) continue;
       if (next % kZeroStride == 0) ++next;
       PRT_CHECK(next < std::numeric_limits<std::uint32_t>::max(), "bicluster ids exceed u32");
-      renumber[row_ids[q]] = static_cast<std::uint32_t>(next++);
+      renumber[inc.ids[q]] = static_cast<std::uint32_t>(next++);
       ++numbered;
     }
   }
-  PRT_CHECK(numbered == nb, "{} of {} biclusters have no row", nb - numbered, nb);
-  const auto ids_total = static_cast<std::size_t>(next);
-  for (std::uint32_t& id : row_ids) id = renumber[id];
-  for (std::size_t j = 0; j < rows; ++j)
-    std::sort(row_ids.begin() + row_off[j], row_ids.begin() + row_off[j + 1]);
+  PRT_CHECK(numbered == items, "{} of {} biclusters have no row", items - numbered, items);
+  for (std::uint32_t& id : inc.ids) id = renumber[id];
+  for (std::size_t j = 0; j + 1 < inc.offsets.size(); ++j)
+    std::sort(inc.ids.begin() + inc.offsets[j], inc.ids.begin() + inc.offsets[j + 1]);
+  std::vector<std::uint32_t> item_of(static_cast<std::size_t>(next), kNoItem);
+  for (std::size_t i = 0; i < items; ++i) item_of[renumber[i]] = static_cast<std::uint32_t>(i);
+  return item_of;
+}
 
-  // Phase 1 arrays in the new order; zero slots have no columns.
-  constexpr auto kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> original(ids_total, kNone);
-  for (std::size_t i = 0; i < nb; ++i) original[renumber[i]] = static_cast<std::uint32_t>(i);
-  for (std::uint32_t i : original) {
-    if (i == kNone) {
+// Phase 1 arrays in the new id order; zero slots have no columns.
+void pack_phase1(const PackItems& items, std::span<const std::uint32_t> item_of,
+                 BiclusterArrays& a) {
+  for (std::uint32_t i : item_of) {
+    if (i == kNoItem) {
       // a zero slot
-    } else if (i < b.biclusters.size()) {
-      const Bicluster& bc = b.biclusters[i];
+    } else if (i < items.b.biclusters.size()) {
+      const Bicluster& bc = items.b.biclusters[i];
       for (std::size_t q = 0; q < bc.cols.size(); ++q) {
         a.bic_columns.push_back(bc.cols[q]);
         a.bic_constants.push_back(narrow_count(bc.constants[q]));
       }
     } else {
-      const Term& term = c.residual[i - b.biclusters.size()];
-      a.bic_columns.push_back(term.col);
-      a.bic_constants.push_back(narrow_count(term.value));
+      a.bic_columns.push_back(items.term(i).col);
+      a.bic_constants.push_back(narrow_count(items.term(i).value));
     }
     PRT_CHECK(a.bic_columns.size() <= std::numeric_limits<std::uint32_t>::max(),
               "more than 2^32 - 1 bicluster columns");
     a.bic_col_offsets.push_back(static_cast<std::uint32_t>(a.bic_columns.size()));
   }
+}
 
-  // Phase 2: SELL-4 over the rows in phase 2's order, lanes delta-coded from the smallest id of
-  // the slice.
+std::uint32_t next_zero_slot(std::uint32_t id) {
+  return (id / kZeroStride + 1) * kZeroStride;
+}
+
+// One lane's codes: deltas from `base` to each of `ids`, crossing gaps of 2^16 or more through
+// zero slots. Returns the id the lane ends on.
+std::uint32_t encode_lane(std::span<const std::uint32_t> ids, std::uint32_t base,
+                          std::vector<std::uint16_t>& codes) {
+  codes.clear();
+  std::uint32_t id = base;
+  for (const std::uint32_t target : ids) {
+    if (target - id > 0xffff) {
+      const std::uint32_t z = next_zero_slot(id);
+      codes.push_back(static_cast<std::uint16_t>(z - id));
+      id = z;
+      while (target - id > 0xffff) {
+        codes.push_back(static_cast<std::uint16_t>(kZeroStride));
+        id += kZeroStride;
+      }
+    }
+    codes.push_back(static_cast<std::uint16_t>(target - id));
+    id = target;
+  }
+  return id;
+}
+
+// Phase 2: SELL-4 over the rows in phase 2's order, lanes delta-coded from the smallest id of
+// the slice, shorter lanes padded onto a zero slot and zero deltas.
+void pack_phase2(const RowIncidence& inc, std::span<const std::uint32_t> order,
+                 BiclusterArrays& a) {
+  const std::size_t rows = a.rows();
   const std::size_t slices = a.slice_count_for_rows();
   a.slice_rows.reserve(slices * kSliceRows);
   a.slice_offsets.reserve(slices + 1);
   a.slice_base.reserve(slices);
-  a.slice_codes.reserve(row_ids.size() + row_ids.size() / 8);
+  a.slice_codes.reserve(inc.ids.size() + inc.ids.size() / 8);
   std::vector<std::uint16_t> lane_codes[kSliceRows];
   for (std::size_t s = 0; s < slices; ++s) {
-    std::uint32_t begin[kSliceRows] = {}, length[kSliceRows] = {};
+    std::span<const std::uint32_t> lane_ids[kSliceRows];
     std::uint32_t base = std::numeric_limits<std::uint32_t>::max();
     for (int lane = 0; lane < kSliceRows; ++lane) {
       const std::size_t slot = s * kSliceRows + static_cast<std::size_t>(lane);
@@ -257,36 +299,16 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
       }
       const std::uint32_t row = order[slot];
       a.slice_rows.push_back(row);
-      begin[lane] = row_off[row];
-      length[lane] = row_off[row + 1] - row_off[row];
-      if (length[lane] > 0) base = std::min(base, row_ids[begin[lane]]);
+      lane_ids[lane] = std::span<const std::uint32_t>(inc.ids).subspan(
+          inc.offsets[row], inc.offsets[row + 1] - inc.offsets[row]);
+      if (!lane_ids[lane].empty()) base = std::min(base, lane_ids[lane].front());
     }
     if (base == std::numeric_limits<std::uint32_t>::max()) base = 0;  // empty: a zero slot
-    // Each lane: deltas to its ids, crossing gaps of 2^16 or more through zero slots, then
-    // onto a zero slot and zero deltas as padding up to the slice's length.
-    auto next_zero = [](std::uint32_t id) { return (id / kZeroStride + 1) * kZeroStride; };
     std::size_t longest = 0;
     std::uint32_t lane_end[kSliceRows];
     for (int lane = 0; lane < kSliceRows; ++lane) {
-      auto& codes = lane_codes[lane];
-      codes.clear();
-      std::uint32_t id = base;
-      for (std::uint32_t q = 0; q < length[lane]; ++q) {
-        const std::uint32_t target = row_ids[begin[lane] + q];
-        if (target - id > 0xffff) {
-          const std::uint32_t z = next_zero(id);
-          codes.push_back(static_cast<std::uint16_t>(z - id));
-          id = z;
-          while (target - id > 0xffff) {
-            codes.push_back(static_cast<std::uint16_t>(kZeroStride));
-            id += kZeroStride;
-          }
-        }
-        codes.push_back(static_cast<std::uint16_t>(target - id));
-        id = target;
-      }
-      lane_end[lane] = id;
-      longest = std::max(longest, codes.size());
+      lane_end[lane] = encode_lane(lane_ids[lane], base, lane_codes[lane]);
+      longest = std::max(longest, lane_codes[lane].size());
     }
     for (int lane = 0; lane < kSliceRows; ++lane) {
       auto& codes = lane_codes[lane];
@@ -294,7 +316,8 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
       // An empty lane sits at the slice's base, a real bicluster (or zero when the slice is
       // empty, then longest = 0): step to the next zero slot first.
       const std::uint32_t id = lane_end[lane];
-      codes.push_back(static_cast<std::uint16_t>(id % kZeroStride == 0 ? 0 : next_zero(id) - id));
+      codes.push_back(
+          static_cast<std::uint16_t>(id % kZeroStride == 0 ? 0 : next_zero_slot(id) - id));
       codes.resize(longest, 0);
     }
     for (std::size_t q = 0; q < longest; ++q)
@@ -304,6 +327,30 @@ BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
     a.slice_base.push_back(base);
     a.slice_offsets.push_back(static_cast<std::uint32_t>(a.slice_codes.size()));
   }
+}
+
+}  // namespace
+
+BiclusterArrays pack(const Biclustering& b, const TransferMatrix& t) {
+  BiclusterArrays a;
+  a.vertices = t.vertex_count();
+  a.local_count = t.local_count();
+  a.pixel_count = static_cast<int>(t.cols());
+  a.supersampling = t.supersampling();
+  const std::size_t rows = a.rows();
+  PRT_CHECK(rows < std::numeric_limits<std::uint32_t>::max(), "{} rows exceed u32 ids", rows);
+
+  const PackItems items(b);
+  const std::size_t nb = items.count();
+  PRT_CHECK(nb < std::numeric_limits<std::uint32_t>::max(), "{} biclusters exceed u32 ids", nb);
+  RowIncidence inc = row_incidence(items, rows);
+  std::vector<std::uint32_t> sizes(nb);
+  for (std::size_t i = 0; i < nb; ++i) sizes[i] = items.size(i);
+  const std::vector<std::uint32_t> order = phase2_row_order(
+      rows, sizes, inc.offsets, [&](std::size_t i, auto&& visit) { items.rows_of(i, visit); });
+  const std::vector<std::uint32_t> item_of = number_by_first_use(inc, nb, order);
+  pack_phase1(items, item_of, a);
+  pack_phase2(inc, order, a);
   return a;
 }
 
