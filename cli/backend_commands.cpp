@@ -6,6 +6,7 @@
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/opencl/cl_device.h"
 #include "prtlab/storage/data_paths.h"
@@ -41,39 +42,45 @@ nlohmann::json spec_json(const ParamSpec& s) {
   return j;
 }
 
+// One entry of `prtlab list --json` (transfer and material backends alike).
+template <typename Entry>
+nlohmann::json entry_json(const Entry& e) {
+  nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
+  for (const auto& s : e.params) params.push_back(spec_json(s));
+  for (const auto& s : e.device_params) device.push_back(spec_json(s));
+  return {{"name", e.name},     {"description", e.description}, {"lossless", e.lossless},
+          {"origin", e.origin}, {"parameters", params},         {"device_parameters", device}};
+}
+
+template <typename Entry>
+void print_entry(const Entry& e) {
+  std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "", e.description.c_str());
+  if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
+  for (const auto& s : e.params)
+    std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+  for (const auto& s : e.device_params)
+    std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+}
+
 void run_list(const ListCli& o) {
   const auto& reg = CompressorRegistry::instance();
+  const auto& materials = MaterialRegistry::instance();
   if (o.json) {
-    nlohmann::json backends = nlohmann::json::array();
-    for (const auto& name : reg.names()) {
-      const auto& e = reg.get(name);
-      nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
-      for (const auto& s : e.params) params.push_back(spec_json(s));
-      for (const auto& s : e.device_params) device.push_back(spec_json(s));
-      backends.push_back({{"name", e.name},
-                          {"description", e.description},
-                          {"lossless", e.lossless},
-                          {"origin", e.origin},
-                          {"parameters", params},
-                          {"device_parameters", device}});
-    }
+    nlohmann::json backends = nlohmann::json::array(), material_list = nlohmann::json::array();
+    for (const auto& name : reg.names()) backends.push_back(entry_json(reg.get(name)));
+    for (const auto& name : materials.names())
+      material_list.push_back(entry_json(materials.get(name)));
     nlohmann::json shared = nlohmann::json::array();
     for (const auto& s : shared_param_specs()) shared.push_back(spec_json(s));
-    print_json({{"backends", backends}, {"shared_parameters", shared}});
+    print_json(
+        {{"backends", backends}, {"materials", material_list}, {"shared_parameters", shared}});
     return;
   }
-  for (const auto& name : reg.names()) {
-    const auto& e = reg.get(name);
-    std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "",
-                e.description.c_str());
-    if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
-    for (const auto& s : e.params)
-      std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
-                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
-    for (const auto& s : e.device_params)
-      std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
-                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
-  }
+  for (const auto& name : reg.names()) print_entry(reg.get(name));
+  std::printf("materials:\n");
+  for (const auto& name : materials.names()) print_entry(materials.get(name));
   std::printf("shared parameters:\n");
   for (const auto& s : shared_param_specs())
     std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
@@ -215,8 +222,8 @@ void add_backend_commands(CLI::App& app) {
   dv->callback([devices_json] { run_devices(*devices_json); });
 
   auto lo = std::make_shared<ListCli>();
-  auto* l =
-      app.add_subcommand("list", "List the registered compressor backends and their parameters");
+  auto* l = app.add_subcommand(
+      "list", "List the registered compressor and material backends and their parameters");
   l->add_flag("--json", lo->json, "Machine-readable output (docs/cli.md)");
   l->callback([lo] { run_list(*lo); });
 

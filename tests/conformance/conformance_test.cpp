@@ -336,8 +336,9 @@ TEST_P(Conformance, FrobeniusErrorIsWhatTheBackendExpects) {
   const FrobeniusError f = frobenius_error(ct, data().transfer, data().grid, 512, 16);
   RecordProperty("frobenius", fmt::format("{:.3e}", f.relative));
   const double slack = f.exact ? 0.0 : 4.0 * f.standard_error;
-  if (entry().lossless)
+  if (entry().lossless) {
     EXPECT_TRUE(within("Frobenius (lossless)", f.relative, kLosslessTolerance + slack));
+  }
   if (const auto expected = ct.expected_frobenius_error()) {
     ASSERT_TRUE(std::isfinite(*expected) && *expected >= 0) << "expected " << *expected;
     EXPECT_NEAR(f.relative, *expected, 1e-3 * *expected + kLosslessTolerance + slack)
