@@ -81,7 +81,7 @@ const Workload& workload() {
         w.env_name = "sun and sky (SunSky defaults)";
       }
       w.radiance = prt::relight_exact(st.result.transfer, w.environment->light_vector());
-      w.materials = prt::load_scene_materials(desc, prt::BtfParams{}, cache);
+      w.materials = prt::load_scene_materials(desc, prt::BtfParams{}, cache, "full", {});
       w.gbuffer = prt::render_gbuffer(w.scene.mesh, prt::scene_camera(w.scene, "front"));
     } catch (const std::exception& e) {
       w.error = e.what();
@@ -284,14 +284,14 @@ int main(int argc, char** argv) {
   const Workload& w = workload();
   if (w.error.empty()) {
     benchmark::AddCustomContext(
-        "workload",
-        fmt::format("bunny front view {} x {}, {} hit pixels, {} vertices, M = {}, "
-                    "BTF {} {} x {} texels x {} views, L* under {}",
-                    w.gbuffer.width, w.gbuffer.height, w.gbuffer.hit_count(),
-                    w.scene.mesh.positions.size(), w.radiance.dim,
-                    w.materials.part_btf[0]->material(), w.materials.part_btf[0]->resolution(),
-                    w.materials.part_btf[0]->resolution(), w.materials.part_btf[0]->view_count(),
-                    w.env_name));
+        "workload", fmt::format("bunny front view {} x {}, {} hit pixels, {} vertices, M = {}, "
+                                "BTF {} {} x {} texels x {} views, L* under {}",
+                                w.gbuffer.width, w.gbuffer.height, w.gbuffer.hit_count(),
+                                w.scene.mesh.positions.size(), w.radiance.dim,
+                                w.materials.part_material[0]->sampling().material,
+                                w.materials.part_material[0]->sampling().resolution,
+                                w.materials.part_material[0]->sampling().resolution,
+                                w.materials.part_material[0]->sampling().view_count(), w.env_name));
   }
   if (ctx)
     benchmark::AddCustomContext("read_bandwidth_GBps",

@@ -7,6 +7,7 @@
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/opencl/cl_device.h"
 #include "prtlab/storage/data_paths.h"
@@ -32,18 +33,41 @@ struct CompressCli {
   std::string save;
 };
 
+// A material backend in `prtlab list`: the fields transfer backends have, without the
+// transfer-only ones (inputs, output basis, size knob).
+nlohmann::json material_json(const MaterialEntry& e) {
+  nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
+  for (const auto& s : e.params) params.push_back(param_spec_json(s));
+  for (const auto& s : e.device_params) device.push_back(param_spec_json(s));
+  return {{"name", e.name},     {"description", e.description}, {"lossless", e.lossless},
+          {"origin", e.origin}, {"parameters", params},         {"device_parameters", device}};
+}
+
+void print_params(const std::vector<ParamSpec>& params, const std::vector<ParamSpec>& device) {
+  for (const auto& s : params)
+    std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+  for (const auto& s : device)
+    std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+}
+
 void run_list(const ListCli& o) {
   const auto& reg = CompressorRegistry::instance();
+  const auto& materials = MaterialRegistry::instance();
   if (!o.markdown.empty()) {
     std::fputs(backend_markdown(reg.get(o.markdown)).c_str(), stdout);
     return;
   }
   if (o.json) {
-    nlohmann::json backends = nlohmann::json::array();
+    nlohmann::json backends = nlohmann::json::array(), material_list = nlohmann::json::array();
     for (const auto& name : reg.names()) backends.push_back(backend_json(reg.get(name)));
+    for (const auto& name : materials.names())
+      material_list.push_back(material_json(materials.get(name)));
     nlohmann::json shared = nlohmann::json::array();
     for (const auto& s : shared_param_specs()) shared.push_back(param_spec_json(s));
-    print_json({{"backends", backends}, {"shared_parameters", shared}});
+    print_json(
+        {{"backends", backends}, {"materials", material_list}, {"shared_parameters", shared}});
     return;
   }
   for (const auto& name : reg.names()) {
@@ -53,12 +77,15 @@ void run_list(const ListCli& o) {
     if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
     std::printf("    output basis %s, size knob %s\n",
                 std::string(to_string(e.output_basis)).c_str(), size_knob_summary(e).c_str());
-    for (const auto& s : e.params)
-      std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
-                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
-    for (const auto& s : e.device_params)
-      std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
-                  std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+    print_params(e.params, e.device_params);
+  }
+  std::printf("materials:\n");
+  for (const auto& name : materials.names()) {
+    const auto& e = materials.get(name);
+    std::printf("%s%s  %s\n", e.name.c_str(), e.lossless ? " (lossless)" : "",
+                e.description.c_str());
+    if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
+    print_params(e.params, e.device_params);
   }
   std::printf("shared parameters:\n");
   for (const auto& s : shared_param_specs())
@@ -201,8 +228,8 @@ void add_backend_commands(CLI::App& app) {
   dv->callback([devices_json] { run_devices(*devices_json); });
 
   auto lo = std::make_shared<ListCli>();
-  auto* l =
-      app.add_subcommand("list", "List the registered compressor backends and their parameters");
+  auto* l = app.add_subcommand(
+      "list", "List the registered compressor and material backends and their parameters");
   l->add_flag("--json", lo->json, "Machine-readable output (docs/cli.md)");
   l->add_option("--markdown", lo->markdown,
                 "Print the parameter block of this backend's README "

@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "provenance.h"
 #include "prtlab/storage/atomic_file.h"
+#include "prtlab/btf/scene_btfs.h"
 #include "prtlab/render/biscale_reference.h"
 #include "prtlab/storage/data_paths.h"
 #include "prtlab/lighting/environment_map.h"
@@ -159,7 +160,7 @@ void run_reference(const ReferenceOptions& o) {
   StageCache cache;
   BtfParams bp;
   bp.resolution = o.btf_resolution;
-  const ShadingMaterials materials = load_scene_materials(desc, bp, cache, !global_options().quiet);
+  const auto part_btfs = scene_part_btfs(desc, bp, cache, !global_options().quiet);
   const GBuffer gbuffer = render_gbuffer(scene.mesh, camera);
   const Cubemap cubemap = resample_to_cubemap(env, desc.cubemap_resolution);
   const RadianceFunction radiance =
@@ -170,7 +171,7 @@ void run_reference(const ReferenceOptions& o) {
   ro.filter = o.filter == "bilinear" ? TexelFilter::kBilinear : TexelFilter::kNearest;
   ro.background = !o.no_background;
   const BiscaleReference ref =
-      render_biscale_reference(gbuffer, scene.mesh, materials, radiance, ro);
+      render_biscale_reference(gbuffer, scene.mesh, part_btfs, radiance, ro);
 
   if (fs::path(o.out).has_parent_path()) fs::create_directories(fs::path(o.out).parent_path());
   write_exr(ref.radiance, o.out);
@@ -185,7 +186,7 @@ void run_reference(const ReferenceOptions& o) {
     po.supersampling = desc.supersampling;
     po.filter = ro.filter;
     po.background = ro.background;
-    write_exr(render_pointwise_transfer(gbuffer, scene.mesh, materials, cubemap, po),
+    write_exr(render_pointwise_transfer(gbuffer, scene.mesh, part_btfs, cubemap, po),
               o.pointwise_out);
   }
   const auto mask = hit_mask(gbuffer);

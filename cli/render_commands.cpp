@@ -18,6 +18,7 @@
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/storage/atomic_file.h"
@@ -35,6 +36,8 @@ struct SceneCli {
   std::string backend;
   std::vector<std::string> params;
   std::vector<std::string> device_params;
+  std::string material = "full";
+  std::vector<std::string> material_params;
   std::string env;
   double rotate_deg = 0;
   std::string view;
@@ -66,6 +69,10 @@ void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("--device-param", o.device_params,
                 "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
                 "never recompresses)");
+  c->add_option("--material", o.material,
+                "Material backend the part BTFs are shaded through (prtlab list: materials)")
+      ->capture_default_str();
+  c->add_option("--material-param", o.material_params, "Material parameter key=value (repeatable)");
   auto* env = c->add_option("--env", o.env,
                             "Environment map: a lat-long EXR path or a name (courtyard, ...)");
   if (env_required) env->required();
@@ -96,8 +103,9 @@ struct Prepared {
   fs::path env_file;
   LatLongImage env;
   Camera camera;
-  std::map<std::string, std::string> params;          // canonical
-  std::map<std::string, std::string> device_options;  // as given (--device-param)
+  std::map<std::string, std::string> params;           // canonical
+  std::map<std::string, std::string> device_options;   // as given (--device-param)
+  std::map<std::string, std::string> material_params;  // canonical
   std::shared_ptr<const CompressedTransfer> compressed;
   bool transfer_cache_hit = false, compress_cache_hit = false;
   ShadingMaterials materials;
@@ -117,6 +125,9 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
   (void)ParamSet(o.backend, entry.params, assignments);
   p.device_options = ParamSet::parse_assignments(o.device_params);
   (void)CompressorRegistry::instance().device_options(o.backend, p.device_options);
+  const auto material_assignments = ParamSet::parse_assignments(o.material_params);
+  const auto& material_entry = MaterialRegistry::instance().get(o.material);
+  p.material_params = ParamSet(o.material, material_entry.params, material_assignments).canonical();
   p.desc = parse_scene(resolve_scene(o.scene));
   (void)scene_view(p.desc, o.view);
   const std::string env_name = o.env.empty() ? default_env : o.env;
@@ -156,7 +167,8 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
   p.camera = scene_camera(p.scene, o.view, overrides);
   BtfParams bp;
   bp.resolution = o.btf_resolution;
-  p.materials = load_scene_materials(p.desc, bp, cache, progress, &p.btf_cache_hits);
+  p.materials = load_scene_materials(p.desc, bp, cache, o.material, material_assignments, progress,
+                                     &p.btf_cache_hits);
   p.ctx = open_device_from_options();
   p.setup_seconds = seconds_since(t0);
   return p;
@@ -230,6 +242,8 @@ void run_render(const RenderCli& o) {
     j["scene"] = p.desc.name;
     j["backend"] = o.backend;
     j["parameters"] = p.params;
+    j["material"] = o.material;
+    j["material_parameters"] = p.material_params;
     j["env"] = p.env_file.string();
     j["rotate_deg"] = o.rotate_deg;
     j["view"] = scene_view(p.desc, o.view).name;
@@ -254,8 +268,8 @@ void run_render(const RenderCli& o) {
     return;
   }
   const auto& t = stats.times;
-  std::printf("scene        %s, backend %s, env %s%s, view %s\n", p.desc.name.c_str(),
-              o.backend.c_str(), p.env_file.stem().string().c_str(),
+  std::printf("scene        %s, backend %s, material %s, env %s%s, view %s\n", p.desc.name.c_str(),
+              o.backend.c_str(), o.material.c_str(), p.env_file.stem().string().c_str(),
               o.rotate_deg != 0 ? fmt::format(" rotated {} deg", o.rotate_deg).c_str() : "",
               scene_view(p.desc, o.view).name.c_str());
   std::printf("image        %d x %d, %zu hit pixels (%.1f %%), %s texels\n", image.width,
@@ -265,7 +279,7 @@ void run_render(const RenderCli& o) {
   std::printf("setup        %.2f s (transfer %s, compression %s, %d of %zu BTFs from cache)\n",
               p.setup_seconds, p.transfer_cache_hit ? "cached" : "computed",
               p.compress_cache_hit ? "cached" : "computed", p.btf_cache_hits,
-              p.materials.part_btf.size());
+              p.materials.part_material.size());
   std::printf(
       "stages (ms)  G-buffer %.2f + upload %.2f | project %.2f, relight %.2f, "
       "L* upload %.2f | shade %.2f (kernels %.2f)\n",
@@ -366,10 +380,15 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
             names += (names.empty() ? "" : ", ") + part.btf;
         return names;
       }(),
-      o.btf_resolution, o.btf_resolution, p.materials.part_btf.front()->view_count());
+      o.btf_resolution, o.btf_resolution,
+      p.materials.part_material.front()->sampling().view_count());
   std::string params;
   for (const auto& [k, v] : p.params) params += (params.empty() ? "" : ", ") + k + "=" + v;
   md += fmt::format("| backend | `{}` ({}) |\n", o.backend, params);
+  std::string material_params;
+  for (const auto& [k, v] : p.material_params)
+    material_params += (material_params.empty() ? "" : ", ") + k + "=" + v;
+  md += fmt::format("| material | `{}` ({}) |\n", o.material, material_params);
   md += fmt::format(
       "| image | {} x {}, view `{}`, {} hit pixels ({:.1f} %) at the first camera, {} texels, "
       "view cache {} |\n",
@@ -412,7 +431,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       "part BTFs from the stage cache).\n",
       p.setup_seconds, p.transfer_cache_hit ? "from cache" : "computed",
       p.compress_cache_hit ? "from cache" : "computed", p.btf_cache_hits,
-      p.materials.part_btf.size());
+      p.materials.part_material.size());
   return md;
 }
 
@@ -474,6 +493,8 @@ void run_fps(const FpsCli& o) {
   j["scene"] = p.desc.name;
   j["backend"] = o.backend;
   j["parameters"] = p.params;
+  j["material"] = o.material;
+  j["material_parameters"] = p.material_params;
   j["env"] = p.env_file.string();
   j["frames"] = n;
   j["width"] = p.camera.width;

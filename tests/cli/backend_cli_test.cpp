@@ -104,6 +104,19 @@ TEST_F(BackendCli, ListAndDevices) {
       EXPECT_EQ(b["origin"], "built-in");
     }
   EXPECT_TRUE(found);
+  found = false;
+  for (const auto& m : list["materials"])
+    if (m["name"] == "full") {
+      found = true;
+      EXPECT_TRUE(m["lossless"].get<bool>());
+      EXPECT_EQ(m["origin"], "built-in");
+      EXPECT_TRUE(m["parameters"].is_array());
+      EXPECT_TRUE(m["device_parameters"].is_array());
+      EXPECT_FALSE(m["description"].get<std::string>().empty());
+    }
+  EXPECT_TRUE(found) << "the full material is listed";
+  for (const auto& b : list["backends"])
+    EXPECT_NE(b["name"], "full") << "a material is no transfer backend";
   EXPECT_EQ(list["shared_parameters"][0]["key"], "seed");
   const auto devices = run_json("devices --json");
   ASSERT_TRUE(devices.contains("devices"));

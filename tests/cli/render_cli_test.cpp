@@ -56,6 +56,8 @@ TEST_F(RenderCli, WritesReadableExrAndPng) {
   for (const char* key : {"gbuffer_ms", "project_ms", "relight_ms", "upload_ms", "shade_ms"})
     EXPECT_TRUE(j["stages"].contains(key)) << key;
   EXPECT_TRUE(j.contains("prtlab"));
+  EXPECT_EQ(j["material"], "full");  // the default material
+  EXPECT_TRUE(j["material_parameters"].contains("seed"));
 
   const RgbImage image = read_exr(out);
   ASSERT_EQ(image.width, 64);
@@ -105,6 +107,17 @@ TEST_F(RenderCli, RejectsUnknownInputsNamingThem) {
           " --btf-resolution 8 --backend nosuchbackend" + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("nosuchbackend"), std::string::npos) << r.err;
+
+  r = run("-q render tiny-sphere-plane --env " + sky() + small() + "--material nosuchmaterial" +
+          out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("nosuchmaterial"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("full"), std::string::npos) << "lists the materials: " << r.err;
+
+  r = run("-q render tiny-sphere-plane --env " + sky() + small() +
+          "--material full --material-param nosuchkey=1" + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("nosuchkey"), std::string::npos) << r.err;
 
   r = run("-q render nosuchscene --env " + sky() + small() + out);
   EXPECT_NE(r.exit_code, 0);

@@ -45,6 +45,7 @@
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 #include "support/temp_dir.h"
+#include "support/test_plugins.h"
 
 namespace prt::conformance {
 namespace {
@@ -71,33 +72,10 @@ constexpr double kFileOverheadRelative = 0.01;
 
 // ---- plugins and parameters of the generated tests ----
 
-struct PluginLoad {
-  std::vector<std::string> paths;
-  std::vector<std::string> names;   ///< backends the plugins registered
-  std::vector<std::string> errors;  ///< one message per plugin that failed to load
-};
+using testing::PluginLoad;
 
 const PluginLoad& plugins() {
-  static const PluginLoad load = [] {
-    PluginLoad out;
-    const char* list = std::getenv("PRTLAB_TEST_PLUGINS");
-    std::string rest = list ? list : "";
-    while (!rest.empty()) {
-      const auto colon = rest.find(':');
-      const std::string path = rest.substr(0, colon);
-      rest = colon == std::string::npos ? "" : rest.substr(colon + 1);
-      if (path.empty()) continue;
-      out.paths.push_back(path);
-      try {
-        for (auto& n : load_plugin(path)) out.names.push_back(std::move(n));
-      } catch (const std::exception& e) {
-        out.errors.push_back(e.what());
-        std::fprintf(stderr, "PRTLAB_TEST_PLUGINS: %s\n", e.what());
-      }
-    }
-    return out;
-  }();
-  return load;
+  return testing::test_plugins();
 }
 
 std::vector<std::string> backend_names() {

@@ -16,13 +16,14 @@
 #include <tuple>
 #include <vector>
 
-#include "prtlab/btf/btf.h"
-#include "prtlab/render/btf_shading.h"
-#include "prtlab/transfer/exact_relight.h"
-#include "prtlab/sphere/hemisphere_grid.h"
-#include "prtlab/render/image_error.h"
-#include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/base/progress.h"
+#include "prtlab/btf/btf.h"
+#include "prtlab/compress/material_registry.h"
+#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/render/image_error.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "prtlab/transfer/visibility.h"
 
@@ -89,7 +90,8 @@ struct TestScene {
   std::size_t plane_vertices = 0;
   GBuffer gbuffer;
   std::vector<std::uint8_t> plane_mask;
-  ShadingMaterials materials;
+  std::vector<std::shared_ptr<const Btf>> btfs;  // per part, for the references
+  ShadingMaterials materials;                    // the same BTFs as `full` materials
   Cubemap cubemap{1};
 };
 
@@ -109,7 +111,8 @@ TestScene make_scene(const Config& c) {
   t.gbuffer = render_gbuffer(t.mesh, camera);
   t.plane_mask = hit_mask(t.gbuffer, 0);
   const auto btf = sampled_btf(c);
-  t.materials.part_btf = {btf, btf};
+  t.btfs = {btf, btf};
+  t.materials.part_material = compress_part_materials(t.btfs, "full", {});
   t.cubemap = cubemap_from_radiance(
       c.R, [c](const Vec3d& w) { return Rgb(static_cast<float>(env_value(c, w))); }, 4);
   return t;
@@ -320,10 +323,10 @@ Prediction predict_and_measure(const Config& c, const HessianGrid& hessian) {
   const RadianceFunction env = [c](const Vec3d& w) {
     return Rgb(static_cast<float>(env_value(c, w)));
   };
-  const BiscaleReference ref = render_biscale_reference(t.gbuffer, t.mesh, t.materials, env, ro);
+  const BiscaleReference ref = render_biscale_reference(t.gbuffer, t.mesh, t.btfs, env, ro);
   PointwiseTransferOptions po;
   po.supersampling = c.s;
-  const RgbImage pw = render_pointwise_transfer(t.gbuffer, t.mesh, t.materials, t.cubemap, po);
+  const RgbImage pw = render_pointwise_transfer(t.gbuffer, t.mesh, t.btfs, t.cubemap, po);
 
   // Per plane vertex: the directional error the model makes there, e0 - D_O, and the
   // silhouette sampling std.
@@ -500,8 +503,7 @@ TEST(BiscaleReference, UnoccludedLambertianPlaneIsExact) {
   camera.height = 16;
   const GBuffer g = render_gbuffer(mesh, camera);
   Config c;  // lambert, through the sampled BTF (the default continuous-light interpolation)
-  ShadingMaterials materials;
-  materials.part_btf = {sampled_btf(c)};
+  const std::vector<std::shared_ptr<const Btf>> materials = {sampled_btf(c)};
   const auto mask = hit_mask(g);
   ASSERT_GT(image_error(constant_image(24, 16, 0), constant_image(24, 16, 0), mask).pixels, 100u);
 
@@ -550,8 +552,8 @@ TEST(BiscaleReference, SphereShadowMatchesTheAnalyticOcclusion) {
   }
   ASSERT_LT(r_in, kRadius);
   ASSERT_GT(r_in, 0.95 * kRadius);
-  const BiscaleReference ref = render_biscale_reference(t.gbuffer, t.mesh, t.materials,
-                                                        [](const Vec3d&) { return Rgb(1.f); });
+  const BiscaleReference ref =
+      render_biscale_reference(t.gbuffer, t.mesh, t.btfs, [](const Vec3d&) { return Rgb(1.f); });
   auto closed_form = [](double radius, double d) {
     return kAlbedo * (1.0 - radius * radius * kHeight / (d * d * d));
   };
@@ -582,14 +584,14 @@ TEST(BiscaleReference, DeterministicForASeed) {
   };
   BiscaleReferenceOptions o;
   o.samples_side = 8;
-  const BiscaleReference a = render_biscale_reference(t.gbuffer, t.mesh, t.materials, sky, o);
-  const BiscaleReference b = render_biscale_reference(t.gbuffer, t.mesh, t.materials, sky, o);
+  const BiscaleReference a = render_biscale_reference(t.gbuffer, t.mesh, t.btfs, sky, o);
+  const BiscaleReference b = render_biscale_reference(t.gbuffer, t.mesh, t.btfs, sky, o);
   EXPECT_EQ(a.radiance.pixels, b.radiance.pixels);
   EXPECT_EQ(a.standard_error.pixels, b.standard_error.pixels);
   EXPECT_GT(a.rays_traced, 0u);
   // Another seed: other samples, the same answer within the noise.
   o.seed = 2;
-  const BiscaleReference other = render_biscale_reference(t.gbuffer, t.mesh, t.materials, sky, o);
+  const BiscaleReference other = render_biscale_reference(t.gbuffer, t.mesh, t.btfs, sky, o);
   EXPECT_NE(a.radiance.pixels, other.radiance.pixels);
   double diff_sq = 0, var = 0;
   for (std::size_t i = 0; i < a.radiance.pixels.size(); ++i) {
@@ -711,19 +713,17 @@ TEST(BiscaleReference, RejectsBadInput) {
   const RadianceFunction sky = [](const Vec3d&) { return Rgb(1.f); };
   BiscaleReferenceOptions o;
   o.samples_side = 7;
-  EXPECT_THROW(render_biscale_reference(t.gbuffer, t.mesh, t.materials, sky, o), ParameterError);
+  EXPECT_THROW(render_biscale_reference(t.gbuffer, t.mesh, t.btfs, sky, o), ParameterError);
   o.samples_side = 4;
-  EXPECT_THROW(render_biscale_reference(t.gbuffer, t.mesh, t.materials, {}, o), ParameterError);
-  ShadingMaterials one_part;
-  one_part.part_btf = {t.materials.part_btf[0]};
+  EXPECT_THROW(render_biscale_reference(t.gbuffer, t.mesh, t.btfs, {}, o), ParameterError);
+  const std::vector<std::shared_ptr<const Btf>> one_part = {t.btfs[0]};
   EXPECT_THROW(render_biscale_reference(t.gbuffer, t.mesh, one_part, sky, o), ParameterError);
   EXPECT_THROW(render_pointwise_transfer(t.gbuffer, t.mesh, one_part, t.cubemap), ParameterError);
   PointwiseTransferOptions po;
   po.supersampling = 0;
-  EXPECT_THROW(render_pointwise_transfer(t.gbuffer, t.mesh, t.materials, t.cubemap, po),
-               ParameterError);
+  EXPECT_THROW(render_pointwise_transfer(t.gbuffer, t.mesh, t.btfs, t.cubemap, po), ParameterError);
   Mesh small = make_plane(1.0, 1.0, 1);  // fewer triangles than the G-buffer refers to
-  EXPECT_THROW(render_biscale_reference(t.gbuffer, small, t.materials, sky, o), ParameterError);
+  EXPECT_THROW(render_biscale_reference(t.gbuffer, small, t.btfs, sky, o), ParameterError);
 }
 
 }  // namespace

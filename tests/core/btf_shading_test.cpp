@@ -12,6 +12,7 @@
 
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/transfer/exact_relight.h"
@@ -32,6 +33,11 @@ BtfParams small_btf(int light_side, int resolution = 8, int view_side = 6) {
   return p;
 }
 
+// The parts' BTFs shaded through the lossless `full` material.
+ShadingMaterials full_materials(const std::vector<std::shared_ptr<const Btf>>& btfs) {
+  return {compress_part_materials(btfs, "full", {})};
+}
+
 // Largest |a - b| over pixels and channels divided by the largest |b| (the image maximum).
 double max_error_vs_image_max(const RgbImage& a, const RgbImage& b) {
   EXPECT_EQ(a.width, b.width);
@@ -50,6 +56,7 @@ double max_error_vs_image_max(const RgbImage& a, const RgbImage& b) {
 struct TinyScene {
   Scene scene =
       load_scene(std::filesystem::path(PRTLAB_SOURCE_DIR) / "scenes/tiny-sphere-plane.toml");
+  std::vector<std::shared_ptr<const Btf>> btfs, lambert_btfs;
   ShadingMaterials materials;
   ShadingMaterials with_lambert;  // the plane's BTF replaced by the view-independent lambert
   GBuffer front, top;
@@ -59,11 +66,13 @@ struct TinyScene {
   TinyScene() {
     const int side = scene.desc.local_grid;
     for (const auto& part : scene.desc.parts)
-      materials.part_btf.push_back(std::make_shared<const Btf>(
+      btfs.push_back(std::make_shared<const Btf>(
           generate_btf(make_btf_material(part.btf, 64), small_btf(side))));
-    with_lambert = materials;
-    with_lambert.part_btf[0] =
+    lambert_btfs = btfs;
+    lambert_btfs[0] =
         std::make_shared<const Btf>(generate_btf(make_btf_material("lambert"), small_btf(side)));
+    materials = full_materials(btfs);
+    with_lambert = full_materials(lambert_btfs);
     CameraOverrides size;
     size.width = 96;
     size.height = 72;
@@ -98,8 +107,8 @@ ClContext* context() {
 
 TEST(BtfShading, TinySceneHasHitsMissesAndBothParts) {
   const auto& s = tiny();
-  EXPECT_FALSE(s.materials.part_btf[0]->view_independent());
-  EXPECT_TRUE(s.with_lambert.part_btf[0]->view_independent());
+  EXPECT_FALSE(s.btfs[0]->view_independent());
+  EXPECT_TRUE(s.lambert_btfs[0]->view_independent());
   int parts[2] = {0, 0};
   for (const auto p : s.front.part)
     if (p >= 0) ++parts[p];
@@ -213,10 +222,11 @@ TEST(BtfShading, CachedAndSinglePassAgree) {
 TEST(BtfShading, OddLightGridUsesTheScalarTail) {
   PRT_REQUIRE_OPENCL();
   const auto& s = tiny();
-  ShadingMaterials mats;
+  std::vector<std::shared_ptr<const Btf>> btfs;
   for (const auto& part : s.scene.desc.parts)
-    mats.part_btf.push_back(std::make_shared<const Btf>(
+    btfs.push_back(std::make_shared<const Btf>(
         generate_btf(make_btf_material(part.btf, 64), small_btf(5, 4, 4))));
+  const ShadingMaterials mats = full_materials(btfs);
   LocalRadiance radiance(RadianceBasis::kPixel, 25, s.scene.mesh.positions.size());
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 2.0f);
@@ -242,9 +252,21 @@ TEST(BtfShading, OddLightGridUsesTheScalarTail) {
 TEST(BtfShading, RejectsMismatchedMaterialsAndRadiance) {
   const auto& s = tiny();
   ShadingMaterials one;
-  one.part_btf.push_back(s.materials.part_btf[0]);
-  EXPECT_THROW(validate_materials(one, s.scene.mesh, 16), ParameterError);          // 2 parts
-  EXPECT_THROW(validate_materials(s.materials, s.scene.mesh, 64), ParameterError);  // M
+  one.part_material.push_back(s.materials.part_material[0]);
+  EXPECT_THROW(validate_materials(one, s.scene.mesh), ParameterError);  // 2 parts
+  ShadingMaterials missing = s.materials;
+  missing.part_material[1] = nullptr;
+  EXPECT_THROW(validate_materials(missing, s.scene.mesh), ParameterError);
+  EXPECT_EQ(validate_materials(s.materials, s.scene.mesh), MaterialLightBasis::pixel_bins(4));
+  // Parts whose materials take light in different bases (M = 16 and M = 25) cannot share L*.
+  ShadingMaterials mixed = s.materials;
+  mixed.part_material[1] = compress_material(
+      "full", {},
+      std::make_shared<const Btf>(generate_btf(make_btf_material("lambert"), small_btf(5, 4, 4))));
+  EXPECT_THROW(validate_materials(mixed, s.scene.mesh), ParameterError);
+  LocalRadiance m64(RadianceBasis::kPixel, 64, s.scene.mesh.positions.size());
+  EXPECT_THROW(shade_frame_reference(s.front, s.scene.mesh, s.materials, m64, nullptr),
+               ParameterError);  // M
   LocalRadiance wrong(RadianceBasis::kPixel, 16, 3);
   EXPECT_THROW(shade_frame_reference(s.front, s.scene.mesh, s.materials, wrong, nullptr),
                ParameterError);
@@ -289,8 +311,8 @@ PlaneResult render_lambert_plane(int side, bool device, double expected_ratio) {
   const MesoStructure flat = height_field_structure(
       "flat", 8, [](float, float) { return 0.0f; }, [](float, float, float) { return 0; },
       {LocalBrdf{albedo, Rgb(0.0f), 0.3f}});
-  ShadingMaterials mats;
-  mats.part_btf.push_back(std::make_shared<const Btf>(generate_btf(flat, small_btf(side, 4, 4))));
+  const ShadingMaterials mats =
+      full_materials({std::make_shared<const Btf>(generate_btf(flat, small_btf(side, 4, 4)))});
 
   Camera cam;
   cam.eye = {0.3, 1.2, 1.4};

@@ -11,6 +11,7 @@
 
 #include "prtlab/btf/btf_materials.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 #include "prtlab/transfer/transfer_matrix.h"
@@ -67,9 +68,10 @@ struct Fixture {
     p.light_side = d.local_grid;
     p.supersampling = 1;
     p.geometry_grid = 64;
+    std::vector<std::shared_ptr<const Btf>> btfs;
     for (const auto& part : d.parts)
-      materials.part_btf.push_back(
-          std::make_shared<const Btf>(generate_btf(make_btf_material(part.btf, 64), p)));
+      btfs.push_back(std::make_shared<const Btf>(generate_btf(make_btf_material(part.btf, 64), p)));
+    materials.part_material = compress_part_materials(btfs, "full", {});
     CameraOverrides size;
     size.width = 80;
     size.height = 60;

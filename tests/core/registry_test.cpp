@@ -1,8 +1,8 @@
-// The compressor registry: the built-in backends are all present (a backend dropped by the
-// linker or by a broken glob fails here), lookups of unknown names list the registered ones,
-// duplicates and incomplete entries are refused, plugins that are missing or are not prtlab
-// plugins give clear errors, and compressed transfers round-trip through save_compressed /
-// load_compressed with the backend named in the file.
+// The compressor and material registries: the built-in backends are all present (a backend
+// dropped by the linker or by a broken glob fails here), lookups of unknown names list the
+// registered ones, duplicates and incomplete entries are refused, plugins that are missing or are
+// not prtlab plugins give clear errors, and compressed transfers round-trip through save_compressed
+// / load_compressed with the backend named in the file.
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -15,6 +15,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "support/temp_dir.h"
@@ -24,7 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // Every backend folder, built-in (compressors/<name>/) and test-only (tests/backends/<name>/,
-// linked into the tests): each registers the backend its folder is named after. A backend
+// linked into the tests): each registers the backend its folder is named after, a transfer
+// compressor or a material (two registries, one set of folder names). A backend
 // whose registrar is lost (linker, glob, a renamed folder) fails here instead of silently
 // disappearing from every table, and nobody keeps a list of names by hand.
 std::vector<std::string> backend_folders() {
@@ -39,6 +41,14 @@ std::vector<std::string> backend_folders() {
   return names;
 }
 const std::vector<std::string> kBuiltinBackends = backend_folders();
+
+// The folders that are transfer compressors: all but the registered materials.
+std::vector<std::string> transfer_folders() {
+  std::vector<std::string> out;
+  for (const auto& n : kBuiltinBackends)
+    if (!MaterialRegistry::instance().contains(n)) out.push_back(n);
+  return out;
+}
 
 using ScratchDir = testing::TempDir;
 
@@ -75,11 +85,19 @@ TransferMatrix small_transfer() {
 TEST(Registry, HoldsEveryBuiltinBackendComplete) {
   const auto& registry = CompressorRegistry::instance();
   const auto names = registry.names();
+  const auto material_names = MaterialRegistry::instance().names();
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
   EXPECT_EQ(std::adjacent_find(names.begin(), names.end()), names.end());
-  ASSERT_GE(kBuiltinBackends.size(), 2u) << "no backend folders found under " PRTLAB_SOURCE_DIR;
-  EXPECT_EQ(names, kBuiltinBackends) << "registered backends differ from the backend folders";
-  for (const auto& name : kBuiltinBackends) {
+  ASSERT_GE(kBuiltinBackends.size(), 3u) << "no backend folders found under " PRTLAB_SOURCE_DIR;
+  // The folders are exactly the transfer names and the material names, and no name is both.
+  std::vector<std::string> all = names;
+  all.insert(all.end(), material_names.begin(), material_names.end());
+  std::sort(all.begin(), all.end());
+  EXPECT_EQ(std::adjacent_find(all.begin(), all.end()), all.end())
+      << "a name is registered both as a transfer compressor and as a material";
+  EXPECT_EQ(all, kBuiltinBackends) << "registered backends differ from the backend folders";
+  EXPECT_EQ(names, transfer_folders());
+  for (const auto& name : transfer_folders()) {
     ASSERT_TRUE(registry.contains(name)) << "built-in backend '" << name << "' is not registered";
     const auto& e = registry.get(name);
     EXPECT_EQ(e.name, name);
@@ -88,6 +106,46 @@ TEST(Registry, HoldsEveryBuiltinBackendComplete) {
     EXPECT_TRUE(e.create && e.load);
   }
   EXPECT_TRUE(registry.get("uncompressed").lossless);
+  for (const auto& name : material_names) {
+    const auto& e = MaterialRegistry::instance().get(name);
+    EXPECT_EQ(e.name, name);
+    EXPECT_EQ(e.origin, "built-in");
+    EXPECT_FALSE(e.description.empty());
+    EXPECT_TRUE(e.create && e.load);
+  }
+  ASSERT_TRUE(MaterialRegistry::instance().contains("full"));
+  EXPECT_TRUE(MaterialRegistry::instance().get("full").lossless);
+}
+
+MaterialEntry dummy_material(std::string name) {
+  MaterialEntry e;
+  e.name = std::move(name);
+  e.description = "test entry";
+  e.create = [](const ParamSet&) -> std::unique_ptr<MaterialCompressor> { return nullptr; };
+  e.load = [](const ArchiveReader&) -> std::unique_ptr<CompressedMaterial> { return nullptr; };
+  return e;
+}
+
+TEST(MaterialRegistry, RefusesDuplicatesIncompleteEntriesAndUnknownNames) {
+  MaterialRegistry local;
+  local.add(dummy_material("alpha"));
+  const std::string dup = message_of([&] { local.add(dummy_material("alpha")); });
+  EXPECT_TRUE(contains(dup, "alpha") && contains(dup, "twice")) << dup;
+  EXPECT_THROW(local.add(dummy_material("")), Error);
+  MaterialEntry no_load = dummy_material("beta");
+  no_load.load = nullptr;
+  EXPECT_THROW(local.add(no_load), Error);
+  MaterialEntry clash = dummy_material("gamma");
+  clash.params = {{"k", ParamType::kInt, "1", 1.0, 8.0, {}, "levels"}};
+  clash.device_params = clash.params;
+  EXPECT_THROW(local.add(clash), Error);
+  EXPECT_EQ(local.names(), std::vector<std::string>{"alpha"});
+
+  const auto& global = MaterialRegistry::instance();
+  const std::string msg = message_of([&] { global.create("no-such-material", {}); });
+  EXPECT_TRUE(contains(msg, "no-such-material") && contains(msg, "full")) << msg;
+  EXPECT_THROW(global.create("full", {{"no_such_key", "1"}}), ParameterError);
+  EXPECT_NE(global.create("full", {{"seed", "3"}}), nullptr);
 }
 
 TEST(Registry, UnknownBackendListsTheRegisteredOnes) {
@@ -96,7 +154,7 @@ TEST(Registry, UnknownBackendListsTheRegisteredOnes) {
   EXPECT_THROW(registry.get("no-such-backend"), ParameterError);
   const std::string msg = message_of([&] { registry.create("no-such-backend", {}); });
   EXPECT_TRUE(contains(msg, "no-such-backend")) << msg;
-  for (const auto& name : kBuiltinBackends) EXPECT_TRUE(contains(msg, name)) << msg;
+  for (const auto& name : transfer_folders()) EXPECT_TRUE(contains(msg, name)) << msg;
 }
 
 TEST(Registry, RefusesDuplicatesAndIncompleteEntries) {
@@ -246,7 +304,7 @@ TEST(CompressedFiles, UnregisteredBackendIsAClearError) {
     EXPECT_TRUE(contains(msg, "no-such-backend")) << msg;
     EXPECT_TRUE(contains(msg, "not registered")) << msg;
     EXPECT_TRUE(contains(msg, "--plugin")) << msg;
-    for (const auto& name : kBuiltinBackends) EXPECT_TRUE(contains(msg, name)) << msg;
+    for (const auto& name : transfer_folders()) EXPECT_TRUE(contains(msg, name)) << msg;
   }
 }
 

@@ -19,7 +19,11 @@
 
 #include "conformance/synthetic_cases.h"
 #include "prtlab/base/error.h"
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/btf/btf_materials.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_error.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "support/temp_dir.h"
@@ -32,6 +36,7 @@ using ::testing::HasSubstr;
 const fs::path kTemplatePlugin = PRTLAB_TEMPLATE_PLUGIN;
 const fs::path kWrongApiPlugin = PRTLAB_WRONG_API_PLUGIN;
 const fs::path kNotAPlugin = PRTLAB_NOT_A_PLUGIN;
+const fs::path kMaterialPlugin = PRTLAB_MATERIAL_PLUGIN;
 
 // Before any OpenCL platform query: a private prtlab cache for this process, PoCL's kernel
 // cache shared by the test processes of this build (as in the conformance suite).
@@ -191,6 +196,39 @@ TEST(PluginRefusal, AnotherApiVersionIsRefusedWithAClearMessage) {
     EXPECT_THAT(e.what(), HasSubstr("rebuild the plugin"));
   }
   EXPECT_EQ(CompressorRegistry::instance().names(), before);
+}
+
+// A plugin that registers a material (tests/plugin/material_plugin.cpp): it lands in the material
+// registry with its origin, compresses, saves and loads through the registry, and loading it
+// again is refused. The material conformance suite runs on it as plugin.material_conformance.
+TEST(MaterialPlugin, RegistersItsMaterialWithItsOriginAndWorks) {
+  ASSERT_TRUE(fs::exists(kMaterialPlugin)) << kMaterialPlugin;
+  EXPECT_FALSE(MaterialRegistry::instance().contains("u8_vectors"));
+  EXPECT_EQ(load_plugin(kMaterialPlugin), std::vector<std::string>{"u8_vectors"});
+  ASSERT_TRUE(MaterialRegistry::instance().contains("u8_vectors"));
+  EXPECT_EQ(MaterialRegistry::instance().get("u8_vectors").origin, kMaterialPlugin.string());
+  EXPECT_FALSE(CompressorRegistry::instance().contains("u8_vectors"));
+
+  BtfParams p;
+  p.resolution = 4;
+  p.view_side = 3;
+  p.light_side = 3;
+  p.supersampling = 1;
+  p.geometry_grid = 32;
+  const auto btf = std::make_shared<const Btf>(generate_btf(make_btf_material("checker", 32), p));
+  const auto m = compress_material("u8_vectors", {}, btf);
+  const double error = material_error(*m, *btf).relative_l2;
+  EXPECT_GT(error, 0.0) << "u8 codes round";
+  EXPECT_LE(error, m->declared_error_bound());
+  const fs::path file = g_scratch / "u8.prt";
+  save_material(*m, file);
+  EXPECT_EQ(load_material(file)->declared_error_bound(), m->declared_error_bound());
+  try {
+    load_plugin(kMaterialPlugin);
+    FAIL() << "the same plugin was loaded twice";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("already loaded"));
+  }
 }
 
 TEST(PluginRefusal, ALibraryThatRegistersNothingIsNotAPlugin) {

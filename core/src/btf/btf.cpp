@@ -153,30 +153,38 @@ Btf::Btf(std::string material, int resolution, int view_side, int light_side,
   }
 }
 
-int Btf::texel_at(Vec2 uv) const {
-  const int x = std::min(static_cast<int>(fract(uv.x) * resolution_), resolution_ - 1);
-  const int y = std::min(static_cast<int>(fract(uv.y) * resolution_), resolution_ - 1);
-  return y * resolution_ + x;
+int btf_texel_at(int resolution, Vec2 uv) {
+  const int x = std::min(static_cast<int>(fract(uv.x) * resolution), resolution - 1);
+  const int y = std::min(static_cast<int>(fract(uv.y) * resolution), resolution - 1);
+  return y * resolution + x;
 }
 
-BtfTexelSamples Btf::texel_samples(Vec2 uv, TexelFilter filter) const {
+BtfTexelSamples btf_texel_samples(int resolution, Vec2 uv, TexelFilter filter) {
   BtfTexelSamples s;
   if (filter == TexelFilter::kNearest) {
-    s.texel[0] = texel_at(uv);
+    s.texel[0] = btf_texel_at(resolution, uv);
     s.weight[0] = 1.0f;
     s.count = 1;
     return s;
   }
-  const float fx = fract(uv.x) * resolution_ - 0.5f, fy = fract(uv.y) * resolution_ - 0.5f;
+  const float fx = fract(uv.x) * resolution - 0.5f, fy = fract(uv.y) * resolution - 0.5f;
   const float x0f = std::floor(fx), y0f = std::floor(fy);
   const float tx = fx - x0f, ty = fy - y0f;
-  const int x0 = wrap(static_cast<int>(x0f), resolution_), x1 = wrap(x0 + 1, resolution_);
-  const int y0 = wrap(static_cast<int>(y0f), resolution_), y1 = wrap(y0 + 1, resolution_);
-  s.texel = {y0 * resolution_ + x0, y0 * resolution_ + x1, y1 * resolution_ + x0,
-             y1 * resolution_ + x1};
+  const int x0 = wrap(static_cast<int>(x0f), resolution), x1 = wrap(x0 + 1, resolution);
+  const int y0 = wrap(static_cast<int>(y0f), resolution), y1 = wrap(y0 + 1, resolution);
+  s.texel = {y0 * resolution + x0, y0 * resolution + x1, y1 * resolution + x0,
+             y1 * resolution + x1};
   s.weight = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
   s.count = 4;
   return s;
+}
+
+int Btf::texel_at(Vec2 uv) const {
+  return btf_texel_at(resolution_, uv);
+}
+
+BtfTexelSamples Btf::texel_samples(Vec2 uv, TexelFilter filter) const {
+  return btf_texel_samples(resolution_, uv, filter);
 }
 
 Rgb Btf::eval(Vec2 uv, Vec3 view_local, int light, TexelFilter filter) const {

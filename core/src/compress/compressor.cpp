@@ -2,17 +2,10 @@
 
 #include <fmt/format.h>
 
-#include <numeric>
-
 #include "prtlab/base/error.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
-
-std::uint64_t StorageReport::total_bytes() const {
-  return std::accumulate(components.begin(), components.end(), std::uint64_t{0},
-                         [](std::uint64_t s, const StorageComponent& c) { return s + c.bytes; });
-}
 
 void check_transfer_shape(const TransferInput& input, std::string_view backend) {
   const TransferMatrix& t = input.transfer;

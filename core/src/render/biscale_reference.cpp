@@ -86,14 +86,14 @@ HitPoint hit_point(const GBuffer& g, const FramedMesh& fm, std::size_t i) {
   return h;
 }
 
-const Btf& part_btf(const ShadingMaterials& materials, int part) {
-  if (part < 0 || static_cast<std::size_t>(part) >= materials.part_btf.size() ||
-      !materials.part_btf[static_cast<std::size_t>(part)]) {
+const Btf& part_btf(std::span<const std::shared_ptr<const Btf>> part_btfs, int part) {
+  if (part < 0 || static_cast<std::size_t>(part) >= part_btfs.size() ||
+      !part_btfs[static_cast<std::size_t>(part)]) {
     throw ParameterError(
-        fmt::format("bi-scale reference: part {} has no BTF (the materials list {} parts)", part,
-                    materials.part_btf.size()));
+        fmt::format("bi-scale reference: part {} has no BTF ({} part BTFs were given)", part,
+                    part_btfs.size()));
   }
-  return *materials.part_btf[static_cast<std::size_t>(part)];
+  return *part_btfs[static_cast<std::size_t>(part)];
 }
 
 int light_side_of(const Btf& btf) {
@@ -184,7 +184,7 @@ Rgb btf_eval_continuous(const Btf& btf, Vec2 uv, Vec3 view_local, const Vec3d& l
 }
 
 BiscaleReference render_biscale_reference(const GBuffer& gbuffer, const Mesh& mesh,
-                                          const ShadingMaterials& materials,
+                                          std::span<const std::shared_ptr<const Btf>> part_btfs,
                                           const RadianceFunction& environment,
                                           const BiscaleReferenceOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -203,11 +203,11 @@ BiscaleReference render_biscale_reference(const GBuffer& gbuffer, const Mesh& me
   const int samples = side * side;
 
   // Cell-mean cosines of the parts' BTF light grids (btf.h "Units"; built once).
-  std::vector<std::vector<double>> mean_cos(materials.part_btf.size());
+  std::vector<std::vector<double>> mean_cos(part_btfs.size());
   if (!options.btf) {
     for (std::size_t p = 0; p < mean_cos.size(); ++p) {
-      if (!materials.part_btf[p]) continue;
-      const HemisphereGrid grid(light_side_of(*materials.part_btf[p]));
+      if (!part_btfs[p]) continue;
+      const HemisphereGrid grid(light_side_of(*part_btfs[p]));
       mean_cos[p] = grid.projected_solid_angles();
       for (double& m : mean_cos[p]) m /= grid.cell_solid_angle();
     }
@@ -236,7 +236,7 @@ BiscaleReference render_biscale_reference(const GBuffer& gbuffer, const Mesh& me
             const HitPoint h = hit_point(gbuffer, fm, i);
             const Btf* btf = nullptr;
             if (!options.btf) {
-              btf = &part_btf(materials, h.part);
+              btf = &part_btf(part_btfs, h.part);
               const std::vector<double>& mc = mean_cos[static_cast<std::size_t>(h.part)];
               // b / (cell-mean cosine) at the light samples for this pixel's texel(s) and view.
               b.resize(static_cast<std::size_t>(btf->light_count()));
@@ -299,7 +299,8 @@ BiscaleReference render_biscale_reference(const GBuffer& gbuffer, const Mesh& me
 }
 
 RgbImage render_pointwise_transfer(const GBuffer& gbuffer, const Mesh& mesh,
-                                   const ShadingMaterials& materials, const Cubemap& environment,
+                                   std::span<const std::shared_ptr<const Btf>> part_btfs,
+                                   const Cubemap& environment,
                                    const PointwiseTransferOptions& options) {
   if (options.supersampling < 1 || options.supersampling > 15) {
     throw ParameterError(
@@ -317,10 +318,9 @@ RgbImage render_pointwise_transfer(const GBuffer& gbuffer, const Mesh& mesh,
   for (int k = 0; k < n; ++k)
     light[static_cast<std::size_t>(k)] =
         Vec3d(environment.radiance[static_cast<std::size_t>(k)]) * layout.solid_angle(k);
-  std::vector<std::unique_ptr<HemisphereGrid>> grids(materials.part_btf.size());
+  std::vector<std::unique_ptr<HemisphereGrid>> grids(part_btfs.size());
   for (std::size_t p = 0; p < grids.size(); ++p) {
-    if (materials.part_btf[p])
-      grids[p] = std::make_unique<HemisphereGrid>(light_side_of(*materials.part_btf[p]));
+    if (part_btfs[p]) grids[p] = std::make_unique<HemisphereGrid>(light_side_of(*part_btfs[p]));
   }
 
   RgbImage out(gbuffer.width, gbuffer.height);
@@ -345,7 +345,7 @@ RgbImage render_pointwise_transfer(const GBuffer& gbuffer, const Mesh& mesh,
               continue;
             }
             const HitPoint h = hit_point(gbuffer, fm, i);
-            const Btf& btf = part_btf(materials, h.part);
+            const Btf& btf = part_btf(part_btfs, h.part);
             const HemisphereGrid& grid = *grids[static_cast<std::size_t>(h.part)];
             scene.visibility(dirs, h.position, h.frame.n, s.counts);
             s.local_radiance.assign(static_cast<std::size_t>(grid.cell_count()), Vec3d(0.0));

@@ -8,8 +8,10 @@
 #include <map>
 #include <optional>
 
-#include "prtlab/opencl/cl_runtime.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/material_registry.h"
+#include "prtlab/opencl/cl_runtime.h"
+#include "render/shading_program.h"
 
 namespace prt {
 
@@ -17,26 +19,12 @@ static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb must be three packed floats
 
 namespace {
 
-constexpr std::size_t kWorkGroup = 64;
+constexpr std::size_t kWorkGroup = kShadingWorkGroup;
 
 std::size_t part_count(const Mesh& mesh) {
   std::size_t parts = 1;
   for (const auto p : mesh.triangle_part) parts = std::max<std::size_t>(parts, p + 1u);
   return parts;
-}
-
-void validate_radiance(const LocalRadiance& radiance, const Mesh& mesh) {
-  if (radiance.basis != RadianceBasis::kPixel)
-    throw ParameterError(
-        fmt::format("BTF shading needs pixel-basis local radiance (M values per "
-                    "vertex), got basis '{}'",
-                    to_string(radiance.basis)));
-  if (radiance.vertices != mesh.positions.size() ||
-      radiance.values.size() != radiance.vertices * static_cast<std::size_t>(radiance.dim))
-    throw ParameterError(
-        fmt::format("BTF shading: local radiance has {} vertices x {} values, the "
-                    "mesh has {} vertices",
-                    radiance.vertices, radiance.dim, mesh.positions.size()));
 }
 
 // The background pixel a miss shows, or `black` (a pixel index past the cubemap) without one.
@@ -53,28 +41,43 @@ double event_ms(ClContext& ctx, cl::Event& event, const std::string& name) {
 
 }  // namespace
 
-void validate_materials(const ShadingMaterials& materials, const Mesh& mesh, int dim) {
+std::vector<const CompressedMaterial*> ShadingMaterials::parts() const {
+  std::vector<const CompressedMaterial*> out;
+  for (const auto& m : part_material) out.push_back(m.get());
+  return out;
+}
+
+MaterialLightBasis validate_materials(const ShadingMaterials& materials, const Mesh& mesh) {
   const std::size_t parts = part_count(mesh);
-  if (materials.part_btf.size() < parts)
-    throw ParameterError(fmt::format("BTF shading: the mesh has {} parts but {} BTFs were given",
-                                     parts, materials.part_btf.size()));
-  for (std::size_t p = 0; p < materials.part_btf.size(); ++p) {
-    const auto& btf = materials.part_btf[p];
-    if (!btf) throw ParameterError(fmt::format("BTF shading: part {} has no BTF", p));
-    if (btf->light_count() != dim)
-      throw ParameterError(
-          fmt::format("BTF shading: part {}'s BTF '{}' has M = {} light "
-                      "directions, the local radiance has {} (generate it with "
-                      "light_side = the scene's local_grid)",
-                      p, btf->material(), btf->light_count(), dim));
+  if (materials.part_material.size() < parts)
+    throw ParameterError(
+        fmt::format("BTF shading: the mesh has {} parts but {} materials were given", parts,
+                    materials.part_material.size()));
+  for (std::size_t p = 0; p < materials.part_material.size(); ++p)
+    if (!materials.part_material[p])
+      throw ParameterError(fmt::format("BTF shading: part {} has no material", p));
+  const CompressedMaterial& first = *materials.part_material.front();
+  for (std::size_t p = 1; p < materials.part_material.size(); ++p) {
+    const CompressedMaterial& m = *materials.part_material[p];
+    if (m.backend() != first.backend())
+      throw ParameterError(fmt::format(
+          "BTF shading: part {} uses material '{}', part 0 '{}': a scene shades with one "
+          "material backend",
+          p, m.backend(), first.backend()));
+    if (m.light_basis() != first.light_basis())
+      throw ParameterError(fmt::format(
+          "BTF shading: part {}'s material ('{}') takes light in {}, part 0's in {} (generate "
+          "every BTF with light_side = the scene's local_grid)",
+          p, m.sampling().material, m.light_basis().describe(), first.light_basis().describe()));
   }
+  return first.light_basis();
 }
 
 RgbImage shade_frame_reference(const GBuffer& g, const Mesh& mesh,
                                const ShadingMaterials& materials, const LocalRadiance& radiance,
                                const Cubemap* background, const ShadingOptions& options) {
-  validate_radiance(radiance, mesh);
-  validate_materials(materials, mesh, radiance.dim);
+  const MaterialLightBasis basis = validate_materials(materials, mesh);
+  check_light_basis(basis, radiance, mesh.positions.size(), "BTF shading");
   const Cubemap* bg = options.background ? background : nullptr;
   const int m = radiance.dim;
   RgbImage image(g.width, g.height);
@@ -94,10 +97,11 @@ RgbImage shade_frame_reference(const GBuffer& g, const Mesh& mesh,
         const auto l0 = radiance.vertex(v[0]), l1 = radiance.vertex(v[1]),
                    l2 = radiance.vertex(v[2]);
         for (int j = 0; j < m; ++j) lstar[j] = w0 * l0[j] + w1 * l1[j] + w2 * l2[j];
-        const Btf& btf = *materials.part_btf[static_cast<std::size_t>(g.part[i])];
+        const CompressedMaterial& material =
+            *materials.part_material[static_cast<std::size_t>(g.part[i])];
         const Vec2 uv(g.uv[2 * i], g.uv[2 * i + 1]);
         const Vec3 e(g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2]);
-        image.at(x, y) = btf.shade(uv, e, lstar, options.filter);
+        image.at(x, y) = material.shade(uv, e, lstar, options.filter);
       }
     }
   });
@@ -112,9 +116,11 @@ struct DeviceBtfShader::Impl {
   int m = 0;
   std::size_t vertices = 0;
   std::size_t parts = 0;
-  std::vector<int> part_texel_reads;  // view vectors read per hit pixel of each part
+  MaterialLightBasis basis;
+  std::unique_ptr<DeviceMaterial> material;
+  std::vector<std::uint64_t> part_material_bytes;  // material bytes a hit pixel of each part reads
   cl::Kernel single, view_cache, cached;
-  cl::Buffer indices, btf, part_offset, part_info;
+  cl::Buffer indices;
   cl::Buffer code, slot_ids, slot_geom, slot_view, radiance, cache, background, image;
   // The buffer the kernels read L* from: `radiance` (uploaded by set_radiance) or a
   // relighter's output buffer (set_radiance_buffer).
@@ -124,7 +130,7 @@ struct DeviceBtfShader::Impl {
 
   int width = 0, height = 0;
   std::size_t pixels = 0, slots = 0;
-  std::uint64_t view_vectors_per_frame = 0;  // sum over hit pixels of part_texel_reads
+  std::uint64_t material_bytes_per_frame = 0;  // sum over hit pixels of part_material_bytes
   std::vector<std::int32_t> codes;
   std::vector<std::uint32_t> miss_pixels;
   std::vector<Vec3> miss_directions;
@@ -149,52 +155,30 @@ struct DeviceBtfShader::Impl {
 
 DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
                                  const ShadingMaterials& materials, const Cubemap* background,
-                                 const ShadingOptions& options)
+                                 const ShadingOptions& options,
+                                 const std::map<std::string, std::string>& material_device_options)
     : impl_(std::make_unique<Impl>(context, options)) {
   Impl& s = *impl_;
-  if (materials.part_btf.empty() || !materials.part_btf.front())
+  if (materials.part_material.empty() || !materials.part_material.front())
     throw ParameterError("BTF shading: no materials given");
-  s.m = materials.part_btf.front()->light_count();
-  validate_materials(materials, mesh, s.m);
+  s.basis = validate_materials(materials, mesh);
+  s.m = s.basis.dim;
   s.vertices = mesh.positions.size();
-  s.parts = materials.part_btf.size();
+  s.parts = materials.part_material.size();
 
-  KernelDefines defines;
-  defines.set("PRT_WG_SIZE", kWorkGroup)
-      .set("PRT_M", s.m)
-      .set("PRT_BILINEAR", options.filter == TexelFilter::kBilinear ? 1 : 0);
-  const cl::Program program = build_program(context, "btf_shading", defines);
+  const std::vector<const CompressedMaterial*> parts = materials.parts();
+  s.material = upload_materials(context, parts, material_device_options);
+  const cl::Program program = build_shading_program(context, *s.material, s.m, options.filter);
   s.single = make_kernel(program, "btf_shade_single");
   s.view_cache = make_kernel(program, "btf_view_cache");
   s.cached = make_kernel(program, "btf_shade_cached");
+  s.material->set_args(s.single, kSingleMaterialArg);
+  s.material->set_args(s.view_cache, kViewCacheMaterialArg);
+  for (std::size_t p = 0; p < s.parts; ++p)
+    s.part_material_bytes.push_back(s.material->bytes_per_hit(p, options.filter));
 
   s.indices = upload(context, std::span<const std::uint32_t>(mesh.indices), "shading triangles");
-  // Distinct BTFs once each, in part order, into one buffer.
-  std::map<const Btf*, std::uint64_t> offset_of;
-  std::vector<const Btf*> order;
-  std::uint64_t total = 0;
-  for (const auto& b : materials.part_btf) {
-    if (offset_of.emplace(b.get(), total).second) {
-      order.push_back(b.get());
-      total += b->value_count();
-    }
-  }
-  s.btf = make_buffer(context, total * sizeof(float), CL_MEM_READ_ONLY, "BTFs");
-  for (const Btf* b : order)
-    write_buffer(context, s.btf, b->data().data(), b->bytes(), "BTFs",
-                 offset_of.at(b) * sizeof(float));
-  std::vector<cl_ulong> offsets;
-  std::vector<cl_int4> info;
-  const int texels = options.filter == TexelFilter::kBilinear ? 4 : 1;
-  for (const auto& b : materials.part_btf) {
-    offsets.push_back(offset_of.at(b.get()));
-    info.push_back(cl_int4{{b->resolution(), b->view_side(), b->view_independent() ? 1 : 0, 0}});
-    s.part_texel_reads.push_back(texels * (b->view_independent() ? 1 : 4));
-  }
-  s.part_offset = upload(context, std::span<const cl_ulong>(offsets), "BTF part offsets");
-  s.part_info = upload(context, std::span<const cl_int4>(info), "BTF part table");
-  s.static_bytes = mesh.indices.size() * 4 + total * sizeof(float) + offsets.size() * 8 +
-                   info.size() * sizeof(cl_int4);
+  s.static_bytes = mesh.indices.size() * 4 + s.material->device_bytes();
   s.radiance = make_buffer(context, s.vertices * s.m * sizeof(Rgb), CL_MEM_READ_ONLY,
                            "shading local radiance");
   set_background(background);
@@ -248,7 +232,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
   view.reserve(expected);
   s.miss_pixels.reserve(s.pixels - std::min(s.pixels, s.slots));
   s.miss_directions.reserve(s.pixels - std::min(s.pixels, s.slots));
-  s.view_vectors_per_frame = 0;
+  s.material_bytes_per_frame = 0;
   for (std::size_t i = 0; i < s.pixels; ++i) {
     const std::int32_t tri = g.triangle[i];
     if (tri < 0) {
@@ -265,7 +249,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
     geom.push_back(cl_float4{{g.bary[2 * i], g.bary[2 * i + 1], g.uv[2 * i], g.uv[2 * i + 1]}});
     view.push_back(
         cl_float4{{g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2], 0.0f}});
-    s.view_vectors_per_frame += static_cast<std::uint64_t>(s.part_texel_reads[part]);
+    s.material_bytes_per_frame += s.part_material_bytes[static_cast<std::size_t>(part)];
   }
   s.slots = ids.size();
   s.compute_miss_codes();
@@ -305,12 +289,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
 
 void DeviceBtfShader::set_radiance(const LocalRadiance& radiance) {
   Impl& s = *impl_;
-  if (radiance.basis != RadianceBasis::kPixel || radiance.dim != s.m ||
-      radiance.vertices != s.vertices || radiance.values.size() != s.vertices * s.m)
-    throw ParameterError(fmt::format(
-        "BTF shading: need pixel-basis local radiance of {} vertices x M = {}, got basis '{}' "
-        "with {} vertices x {}",
-        s.vertices, s.m, to_string(radiance.basis), radiance.vertices, radiance.dim));
+  check_light_basis(s.basis, radiance, s.vertices, "BTF shading");
   write_buffer(s.ctx, s.radiance, radiance.values.data(), radiance.values.size() * sizeof(Rgb),
                "shading local radiance");
   s.radiance_source = s.radiance;
@@ -323,8 +302,8 @@ void DeviceBtfShader::set_radiance_buffer(const cl::Buffer& radiance) {
   const auto size = radiance.getInfo<CL_MEM_SIZE>();
   if (size < need)
     throw ParameterError(fmt::format(
-        "BTF shading: the local radiance buffer holds {} bytes; {} vertices x M = {} need {}",
-        size, s.vertices, s.m, need));
+        "BTF shading: the local radiance buffer holds {} bytes; {} vertices x M = {} need {}", size,
+        s.vertices, s.m, need));
   s.radiance_source = radiance;
   s.have_radiance = true;
 }
@@ -338,15 +317,14 @@ double DeviceBtfShader::shade() {
   const auto pixels = static_cast<cl_uint>(s.pixels);
   if (!s.options.cache_view_vectors) {
     set_args(s.single, pixels, s.code, s.slot_ids, s.slot_geom, s.slot_view, s.indices,
-             s.radiance_source,
-             s.btf, s.part_offset, s.part_info, s.background, s.image);
+             s.radiance_source, s.background, s.image);
     cl::Event ev =
         launch(s.ctx, "btf_shade_single", s.single, LaunchRange::linear(s.pixels, kWorkGroup));
     return event_ms(s.ctx, ev, "btf_shade_single");
   }
   if (!s.cache_valid && s.slots > 0) {
     set_args(s.view_cache, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom, s.slot_view,
-             s.btf, s.part_offset, s.part_info, s.cache);
+             s.cache);
     cl::Event ev =
         launch(s.ctx, "btf_view_cache", s.view_cache, LaunchRange::linear(s.slots, kWorkGroup));
     s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache");
@@ -375,8 +353,8 @@ DeviceBtfShader::PassBytes DeviceBtfShader::bytes_per_pass() const {
   const std::uint64_t vector = static_cast<std::uint64_t>(s.m) * sizeof(Rgb);
   const std::uint64_t lstar = 3 * vector * s.slots;
   PassBytes b;
-  b.single_pass = s.view_vectors_per_frame * vector + lstar;
-  b.view_cache = s.view_vectors_per_frame * vector + s.slots * vector;
+  b.single_pass = s.material_bytes_per_frame + lstar;
+  b.view_cache = s.material_bytes_per_frame + s.slots * vector;
   b.cached_shade = s.slots * vector + lstar;
   return b;
 }

@@ -8,6 +8,7 @@
 #include "prtlab/base/statistics.h"
 #include "prtlab/btf/scene_btfs.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/device_radiance_to_bins.h"
@@ -29,9 +30,12 @@ struct FrameRenderer::Impl {
   GBufferTracer tracer;
   std::unique_ptr<DeviceRelighter> relighter;
   std::optional<DeviceBtfShader> shader;
-  // A backend relighting into another basis (SH) is converted to the bins: on the device by
-  // to_bins (made at the first light change, when the relight's dimension is known), in C++ by
+  // How L* reaches the materials (shading_light_path). kToPixelBins: a backend relighting into
+  // SH, shaded with a pixel-bin material, is converted to the bins: on the device by to_bins
+  // (made at the first light change, when the relight's dimension is known), in C++ by
   // to_pixel_basis.
+  MaterialLightBasis basis;
+  LightPath path = LightPath::kDirect;
   std::optional<HemisphereGrid> grid;
   std::optional<DeviceRadianceToBins> to_bins;
 
@@ -40,7 +44,6 @@ struct FrameRenderer::Impl {
   // and is read back only when radiance() asks for it.
   mutable LocalRadiance radiance;
   mutable bool radiance_on_host = false;
-  int local_count = 0;  ///< M
   std::optional<Cubemap> environment;
   std::optional<Cubemap> background;  // what misses show; the lighting cubemap by default
   bool have_camera = false;
@@ -62,19 +65,25 @@ struct FrameRenderer::Impl {
 FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                              std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
                              const ShadingOptions& options,
-                             const std::map<std::string, std::string>& device_options) {
+                             const std::map<std::string, std::string>& device_options,
+                             const std::map<std::string, std::string>& material_device_options) {
   if (!transfer) throw ParameterError("frame renderer: no compressed transfer given");
-  if (materials.part_btf.empty() || !materials.part_btf.front())
+  if (materials.part_material.empty() || !materials.part_material.front())
     throw ParameterError("frame renderer: no materials given");
-  validate_materials(materials, mesh, materials.part_btf.front()->light_count());
+  const MaterialLightBasis basis = validate_materials(materials, mesh);
+  const LightPath path = shading_light_path(transfer->output_basis(), basis, transfer->backend(),
+                                            materials.part_material.front()->backend());
   impl_ = std::make_unique<Impl>(std::move(mesh), std::move(materials), std::move(transfer),
                                  context, options);
   Impl& s = *impl_;
-  s.local_count = s.materials.part_btf.front()->light_count();
-  const int side = static_cast<int>(std::lround(std::sqrt(s.local_count)));
-  if (side * side != s.local_count)
-    throw ParameterError(fmt::format("frame renderer: M = {} is no square grid", s.local_count));
-  s.grid.emplace(side);
+  s.basis = basis;
+  s.path = path;
+  if (s.path == LightPath::kToPixelBins) {
+    const int side = static_cast<int>(std::lround(std::sqrt(s.basis.dim)));
+    if (side * side != s.basis.dim)
+      throw ParameterError(fmt::format("frame renderer: M = {} is no square grid", s.basis.dim));
+    s.grid.emplace(side);
+  }
   if (context) {
     s.relighter = upload_compressed(*s.transfer, *context, device_options);
     if (!s.relighter)
@@ -82,10 +91,9 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
           fmt::format("frame renderer: backend '{}' has no OpenCL relight (run "
                       "with --no-opencl for the C++ path)",
                       s.transfer->backend()));
-    s.shader.emplace(*context, s.mesh, s.materials, nullptr, options);
+    s.shader.emplace(*context, s.mesh, s.materials, nullptr, options, material_device_options);
     // Checks the buffer's size against the mesh before the first frame.
-    if (s.transfer->output_basis() == RadianceBasis::kPixel)
-      s.shader->set_radiance_buffer(s.relighter->output_buffer());
+    if (s.path == LightPath::kDirect) s.shader->set_radiance_buffer(s.relighter->output_buffer());
   }
 }
 
@@ -113,7 +121,7 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
   const LightCoeffs light = s.transfer->project_light(environment);
   s.pending.project_ms += ms_since(t0);
   t0 = Clock::now();
-  if (s.relighter && s.transfer->output_basis() == RadianceBasis::kPixel) {
+  if (s.relighter && s.path == LightPath::kDirect) {
     // The shader reads L* where the relight left it: no read-back, no upload.
     s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
     s.radiance_on_host = false;
@@ -135,14 +143,11 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
   } else {
     LocalRadiance relit;
     s.transfer->relight(light, relit);
-    s.radiance = to_pixel_basis(relit, *s.grid);
+    s.radiance =
+        s.path == LightPath::kToPixelBins ? to_pixel_basis(relit, *s.grid) : std::move(relit);
     s.radiance_on_host = true;
-    if (s.radiance.basis != RadianceBasis::kPixel || s.radiance.vertices != s.mesh.positions.size())
-      throw ParameterError(
-          fmt::format("frame renderer: backend '{}' produced {} values for {} "
-                      "vertices; the mesh has {}",
-                      s.transfer->backend(), s.radiance.values.size(), s.radiance.vertices,
-                      s.mesh.positions.size()));
+    check_light_basis(s.basis, s.radiance, s.mesh.positions.size(),
+                      fmt::format("frame renderer: backend '{}'", s.transfer->backend()));
   }
   s.pending.relight_ms += ms_since(t0);
   s.environment.emplace(environment);
@@ -198,7 +203,7 @@ const GBuffer& FrameRenderer::gbuffer() const {
 const LocalRadiance& FrameRenderer::radiance() const {
   const Impl& s = *impl_;
   if (!s.radiance_on_host && s.relighter && s.environment) {
-    s.radiance = LocalRadiance(RadianceBasis::kPixel, s.local_count, s.mesh.positions.size());
+    s.radiance = LocalRadiance(s.basis.basis, s.basis.dim, s.mesh.positions.size());
     if (!s.radiance.values.empty())
       download(*s.context, s.to_bins ? s.to_bins->output_buffer() : s.relighter->output_buffer(),
                std::span<Rgb>(s.radiance.values), "frame renderer local radiance");
@@ -213,8 +218,11 @@ const DeviceBtfShader* FrameRenderer::device_shader() const {
 // ---- helpers -------------------------------------------------------------------------------
 
 ShadingMaterials load_scene_materials(const SceneDesc& desc, BtfParams params, StageCache& cache,
+                                      const std::string& material,
+                                      const std::map<std::string, std::string>& material_params,
                                       bool show_progress, int* cache_hits) {
-  return {scene_part_btfs(desc, params, cache, show_progress, cache_hits)};
+  const auto btfs = scene_part_btfs(desc, params, cache, show_progress, cache_hits);
+  return {compress_part_materials(btfs, material, material_params)};
 }
 
 LatLongImage rotate_latlong_y(const LatLongImage& image, double degrees) {

@@ -83,6 +83,12 @@ struct BtfTexelSamples {
   int count = 1;
 };
 
+/// The texel of a U x U tile at (u, v): nearest with wrap-around, u and v in any range.
+int btf_texel_at(int resolution, Vec2 uv);
+/// The texel samples of a U x U tile at (u, v) (Btf::texel_samples without the data, for any
+/// representation sampled like a BTF).
+BtfTexelSamples btf_texel_samples(int resolution, Vec2 uv, TexelFilter filter);
+
 class Btf {
  public:
   Btf() = default;

@@ -17,6 +17,7 @@
 
 #include "prtlab/base/progress.h"
 #include "prtlab/compress/params.h"
+#include "prtlab/compress/storage_report.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/transfer/local_radiance.h"
@@ -53,17 +54,6 @@ struct TransferInput {
 struct LightCoeffs {
   std::string basis;
   std::vector<Rgb> values;
-};
-
-/// One stored component: name, bytes, and its byte layout in words ("u16 column id per term").
-struct StorageComponent {
-  std::string name;
-  std::uint64_t bytes = 0;
-  std::string layout;
-};
-struct StorageReport {
-  std::vector<StorageComponent> components;
-  std::uint64_t total_bytes() const;
 };
 
 /// A compressed transfer resident on an OpenCL device.

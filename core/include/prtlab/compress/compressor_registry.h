@@ -108,8 +108,6 @@ std::unique_ptr<CompressedTransfer> load_compressed(const std::filesystem::path&
 
 }  // namespace prt
 
-#define PRT_CONCAT_INNER(a, b) a##b
-#define PRT_CONCAT(a, b) PRT_CONCAT_INNER(a, b)
 #define PRT_REGISTER_COMPRESSOR(make_entry)                                      \
   static const ::prt::CompressorRegistrar PRT_CONCAT(prt_registrar_, __LINE__) { \
     &make_entry                                                                  \

@@ -32,8 +32,8 @@ std::vector<std::filesystem::path> loaded_plugins();
 namespace detail {
 
 struct StaticRegistration {
-  int api = 0;                  ///< kPluginApiVersion the registering code was compiled with
-  std::string_view kind;        ///< "compressor", "material": for messages
+  int api = 0;            ///< kPluginApiVersion the registering code was compiled with
+  std::string_view kind;  ///< "compressor", "material": for messages
   std::function<std::string(const std::string& origin)> add;  ///< registers, returns the name
   std::function<void(const std::string& name)> remove;        ///< undoes add
 };
@@ -43,3 +43,7 @@ void register_static(const StaticRegistration& registration) noexcept;
 
 }  // namespace detail
 }  // namespace prt
+
+// Unique names for the static registrars of PRT_REGISTER_COMPRESSOR and PRT_REGISTER_MATERIAL.
+#define PRT_CONCAT_INNER(a, b) a##b
+#define PRT_CONCAT(a, b) PRT_CONCAT_INNER(a, b)

@@ -43,6 +43,9 @@ struct LaunchRange {
 /// names the kernel and the argument index.
 template <typename... Args>
 void set_args(cl::Kernel& kernel, const Args&... args);
+/// The same from argument index `first` (arguments a kernel's caller appends after its own).
+template <typename... Args>
+void set_args_from(cl::Kernel& kernel, cl_uint first, const Args&... args);
 
 /// Enqueues `kernel` over `range` on the context's queue, records it in ctx.timer() under
 /// `name` (the kernel's function name if empty) and returns its event. Does not wait. A work-
@@ -57,8 +60,8 @@ namespace detail {
 }  // namespace detail
 
 template <typename... Args>
-void set_args(cl::Kernel& kernel, const Args&... args) {
-  cl_uint index = 0;
+void set_args_from(cl::Kernel& kernel, cl_uint first, const Args&... args) {
+  cl_uint index = first;
   auto set_one = [&](const auto& arg) {
     try {
       kernel.setArg(index, arg);
@@ -68,6 +71,11 @@ void set_args(cl::Kernel& kernel, const Args&... args) {
     ++index;
   };
   (set_one(args), ...);
+}
+
+template <typename... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  set_args_from(kernel, 0, args...);
 }
 
 }  // namespace prt

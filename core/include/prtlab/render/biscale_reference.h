@@ -41,15 +41,17 @@
 // rows.
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <span>
 #include <vector>
 
 #include "prtlab/btf/btf.h"
-#include "prtlab/render/btf_shading.h"
-#include "prtlab/sphere/cubemap.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/render/gbuffer.h"
-#include "prtlab/image/image_io.h"
 #include "prtlab/geometry/mesh.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/render/gbuffer.h"
+#include "prtlab/sphere/cubemap.h"
 
 namespace prt {
 
@@ -103,11 +105,11 @@ struct BiscaleReference {
 };
 
 /// Monte Carlo reference of the bi-scale model (see the file comment). `mesh` is the scene the
-/// G-buffer was traced from (it is both receiver and occluder); `materials` gives each part's
+/// G-buffer was traced from (it is both receiver and occluder); `part_btfs` gives each part's
 /// BTF (needed unless options.btf is set). ParameterError on a part without a BTF or a bad
 /// option.
 BiscaleReference render_biscale_reference(const GBuffer& gbuffer, const Mesh& mesh,
-                                          const ShadingMaterials& materials,
+                                          std::span<const std::shared_ptr<const Btf>> part_btfs,
                                           const RadianceFunction& environment,
                                           const BiscaleReferenceOptions& options = {});
 
@@ -122,7 +124,8 @@ struct PointwiseTransferOptions {
 /// with the environment's light vector L_k = radiance_k * solidAngle_k and the BTFs' light
 /// grids (every BTF's light_count() must be a square S^2; the cells are HemisphereGrid(S)).
 RgbImage render_pointwise_transfer(const GBuffer& gbuffer, const Mesh& mesh,
-                                   const ShadingMaterials& materials, const Cubemap& environment,
+                                   std::span<const std::shared_ptr<const Btf>> part_btfs,
+                                   const Cubemap& environment,
                                    const PointwiseTransferOptions& options = {});
 
 }  // namespace prt

@@ -4,14 +4,17 @@
 //   B(x, e) = sum_j b(u(x), e(x), d_j) * L*_j(x),   L*(x) = sum_i beta_i L*_{p_i}
 //
 // where p_0..p_2 are the vertices of the triangle hit at pixel x, beta their barycentrics (from
-// the G-buffer), L*_p the vertex's local incident radiance in the pixel basis (M values, the
-// output of relight()), and b the BTF of the triangle's part, interpolated between the 4
-// nearest view samples on the sphere (btf_view_samples) and looked up at the pixel's UV.
+// the G-buffer), L*_p the vertex's local incident radiance in the material's light basis (the M
+// pixel bins for a pixel-bin material: the output of relight()), and b the reflectance vector
+// of the triangle's part's material (any CompressedMaterial, compress/material_compressor.h;
+// for the `full` material the BTF interpolated between the 4 nearest view samples on the
+// sphere, btf_view_samples) at the pixel's UV and view.
 // Pixels that miss the mesh show the environment radiance in the ray direction (when a
 // background is given) or black.
 //
-// Two implementations: shade_frame_reference (C++, the reference) and DeviceBtfShader (the
-// OpenCL kernels kernels/btf_shading.cl). tests/core/btf_shading_test.cpp compares them.
+// Two implementations: shade_frame_reference (C++, CompressedMaterial::shade, the reference) and
+// DeviceBtfShader (the OpenCL kernels kernels/btf_shading.cl with the material's source, the
+// material contract). tests/core/btf_shading_test.cpp compares them.
 //
 // Background: a miss shows the radiance of the background cubemap pixel containing the ray
 // direction, CubemapLayout::pixel_of(G-buffer direction) in double on the host (both paths use
@@ -25,8 +28,10 @@
 // does the dot products. Without it, one kernel interpolates and dots in one pass.
 // docs/rendering.md "BTF shading" has the measurements.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace cl {
@@ -34,11 +39,12 @@ class Buffer;
 }
 
 #include "prtlab/btf/btf.h"
-#include "prtlab/sphere/cubemap.h"
-#include "prtlab/render/gbuffer.h"
-#include "prtlab/image/image_io.h"
-#include "prtlab/transfer/local_radiance.h"
+#include "prtlab/compress/material_compressor.h"
 #include "prtlab/geometry/mesh.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/render/gbuffer.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/transfer/local_radiance.h"
 
 namespace prt {
 
@@ -52,37 +58,42 @@ struct ShadingOptions {
   bool cache_view_vectors = true;
 };
 
-/// The materials of a scene for shading: one BTF per part (index = part id of the mesh's
-/// triangle_part). Parts may share a BTF. All BTFs must have light_count() == the radiance's
-/// dim (M) (ParameterError otherwise).
+/// The materials of a scene for shading: one compressed material per part (index = part id of
+/// the mesh's triangle_part; compress_part_materials in compress/material_registry.h builds
+/// them from the parts' BTFs). Parts may share a material. All parts use one material backend
+/// and one light basis, which the local radiance must be in.
 struct ShadingMaterials {
-  std::vector<std::shared_ptr<const Btf>> part_btf;
+  std::vector<std::shared_ptr<const CompressedMaterial>> part_material;
+  std::vector<const CompressedMaterial*> parts() const;
 };
 
-/// Throws ParameterError unless every part of `mesh` has a BTF (non-null) with M == `dim`
-/// light directions.
-void validate_materials(const ShadingMaterials& materials, const Mesh& mesh, int dim);
+/// Throws ParameterError unless every part of `mesh` has a material (non-null), all of one
+/// backend and one light basis; returns that basis.
+MaterialLightBasis validate_materials(const ShadingMaterials& materials, const Mesh& mesh);
 
 /// C++ reference of the shading pass: width x height radiance image. `radiance` must be in
-/// the pixel basis with one block of M values per mesh vertex. Parallel over rows (TBB).
-/// Hit pixels: L*(x) interpolated in float (b0 = 1 - b1 - b2), then Btf::shade.
+/// the materials' light basis with one block of dim values per mesh vertex. Parallel over rows
+/// (TBB). Hit pixels: L*(x) interpolated in float (b0 = 1 - b1 - b2), then
+/// CompressedMaterial::shade.
 RgbImage shade_frame_reference(const GBuffer& gbuffer, const Mesh& mesh,
                                const ShadingMaterials& materials, const LocalRadiance& radiance,
                                const Cubemap* background, const ShadingOptions& options = {});
 
-/// The OpenCL shading pass. The mesh's triangles and the BTFs are uploaded once; the G-buffer
+/// The OpenCL shading pass. The mesh's triangles and the materials are uploaded once
+/// (upload_materials, with `material_device_options`); the G-buffer
 /// on a view change (set_gbuffer); L* on a light change (set_radiance), the background with
 /// it (set_background). shade() runs the kernel(s) and leaves the image on the device;
 /// read_image() reads it back.
 ///
-/// Device data: all distinct BTFs in one float buffer with a per-part offset table; the
-/// G-buffer compacted to its hit pixels ("slots": triangle, part, barycentrics, UV, local
-/// view) plus one int per pixel (slot, or the background pixel of a miss); L* as uploaded
-/// (vertices x M x RGB floats); the image as width x height x RGB floats.
+/// Device data: the materials' buffers (DeviceMaterial); the G-buffer compacted to its hit pixels
+/// ("slots": triangle, part, barycentrics, UV, local view) plus one int per pixel (slot, or the
+/// background pixel of a miss); L* as uploaded (vertices x M x RGB floats); the image as width x
+/// height x RGB floats.
 class DeviceBtfShader {
  public:
   DeviceBtfShader(ClContext& context, const Mesh& mesh, const ShadingMaterials& materials,
-                  const Cubemap* background, const ShadingOptions& options = {});
+                  const Cubemap* background, const ShadingOptions& options = {},
+                  const std::map<std::string, std::string>& material_device_options = {});
   ~DeviceBtfShader();
   DeviceBtfShader(DeviceBtfShader&&) noexcept;
   DeviceBtfShader& operator=(DeviceBtfShader&&) noexcept;
@@ -103,15 +114,16 @@ class DeviceBtfShader {
   double last_view_cache_ms() const;
   RgbImage read_image() const;
 
-  /// Bytes of BTF and L* data the kernel reads for the current G-buffer (each hit pixel:
-  /// 4 view samples x M x RGB floats of its texel(s), 3 vertices x M x RGB floats of L*), the
+  /// Bytes of material and L* data the kernel reads for the current G-buffer (each hit pixel:
+  /// DeviceMaterial::bytes_per_hit, for `full` 4 view samples x M x RGB floats of its texel(s);
+  /// 3 vertices x M x RGB floats of L*), the
   /// numerator of the bandwidth bound. This is the single-pass (uncached) shading kernel's
   /// traffic; bytes_per_pass() splits the cached passes.
   std::uint64_t bytes_read_per_frame() const;
   /// Bytes each kind of pass moves for the current G-buffer (reads + the cache write).
   struct PassBytes {
     std::uint64_t single_pass = 0;   ///< == bytes_read_per_frame()
-    std::uint64_t view_cache = 0;    ///< BTF reads of the view-cache kernel + its writes
+    std::uint64_t view_cache = 0;    ///< material reads of the view-cache kernel + its writes
     std::uint64_t cached_shade = 0;  ///< b(u, e) + 3 vertices' L* per hit pixel
   };
   PassBytes bytes_per_pass() const;

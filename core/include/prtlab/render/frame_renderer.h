@@ -66,15 +66,19 @@ struct FrameStats {
 
 class FrameRenderer {
  public:
-  /// `context` null: C++ relight and shading. A transfer relighting into another basis (SH) is
+  /// `context` null: C++ relight and shading. L* reaches the materials as shading_light_path()
+  /// says (compress/material_light_basis.h): directly when the transfer's output basis is the
+  /// materials' light basis; a transfer relighting into SH shaded with pixel-bin materials is
   /// evaluated at the bins (to_pixel_basis; on the device, DeviceRadianceToBins). Throws
-  /// ParameterError when its vertex count differs from the mesh's or a material does not match
-  /// (validate_materials).
-  /// `device_options`: the backend's device_params for its upload.
+  /// ParameterError when there is no such path, when the transfer's vertex count differs from
+  /// the mesh's or a material does not match (validate_materials).
+  /// `device_options`: the backend's device_params for its upload; `material_device_options`
+  /// the material backend's, for the shader's.
   FrameRenderer(Mesh mesh, ShadingMaterials materials,
                 std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
                 const ShadingOptions& options = {},
-                const std::map<std::string, std::string>& device_options = {});
+                const std::map<std::string, std::string>& device_options = {},
+                const std::map<std::string, std::string>& material_device_options = {});
   ~FrameRenderer();
   FrameRenderer(FrameRenderer&&) noexcept;
   FrameRenderer& operator=(FrameRenderer&&) noexcept;
@@ -95,8 +99,8 @@ class FrameRenderer {
   const FrameCounters& counters() const;
   const Mesh& mesh() const;
   const GBuffer& gbuffer() const;  ///< of the current camera
-  /// L* of the current environment (on the device path read back on the first call after a
-  /// light change).
+  /// L* of the current environment in the materials' light basis (on the device path read back
+  /// on the first call after a light change).
   const LocalRadiance& radiance() const;
   /// The device shader (nullptr on the C++ path): byte counts, hit pixels.
   const DeviceBtfShader* device_shader() const;
@@ -108,10 +112,13 @@ class FrameRenderer {
 
 // ---- helpers of the render and fps commands ------------------------------------------------
 
-/// The BTF of every part of a scene: generate_btf_cached(part.btf, params with light_side =
-/// desc.local_grid) once per distinct material. `cache_hits` (optional) counts the materials
-/// that came from the stage cache.
+/// The material of every part of a scene: the part BTFs (scene_part_btfs: generate_btf_cached
+/// with light_side = desc.local_grid, once per distinct BTF) compressed with the material
+/// backend `material` ("full" keeps them as they are) and `material_params`.
+/// `cache_hits` (optional) counts the BTFs that came from the stage cache.
 ShadingMaterials load_scene_materials(const SceneDesc& desc, BtfParams params, StageCache& cache,
+                                      const std::string& material,
+                                      const std::map<std::string, std::string>& material_params,
                                       bool show_progress = false, int* cache_hits = nullptr);
 
 /// The environment rotated by `degrees` about +y (right-handed: +x turns towards -z):

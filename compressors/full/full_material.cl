@@ -1,0 +1,78 @@
+// Material `full` (compressors/full/README.md): the sampled BTF itself. b(u, e, .) is the
+// weighted sum of the BTF's (texel, view) vectors: 1 (nearest) or 4 (bilinear) texels x the 4
+// view samples around e (btf_view_samples), zero weights dropped. Implements the material
+// contract of compress/material_compressor.h; kernels/btf_lookup.cl comes before this file.
+//
+// Data (packed float RGB, no padding):
+//   full_btf          every distinct part BTF, rgb[((texel * V + view) * M + light) * 3 + c]
+//                     from the part's offset (floats)
+//   full_part_offset  per part, the offset of its BTF in full_btf
+//   full_part_info    per part (U, view_side, view_independent, 0)
+
+#define PRT_MATERIAL_PARAMS                                                         \
+  , __global const float *restrict full_btf, __global const ulong *restrict full_part_offset, \
+      __global const int4 *restrict full_part_info
+#define PRT_MATERIAL_ARGS , full_btf, full_part_offset, full_part_info
+
+#define FULL_PAIRS (PRT_TEXELS * 4)
+
+typedef struct {
+  ulong offsets[FULL_PAIRS];  // of the (texel, view) vectors, in floats
+  float weights[FULL_PAIRS];
+  int n;
+} prt_material;
+
+// The (texel, view) vectors of a hit and their weights (Btf::texel_samples x btf_view_samples,
+// texel outer, view inner, zero weights dropped).
+void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
+  const ulong base = full_part_offset[part];
+  const int4 info = full_part_info[part];
+  const int res = info.x, side = info.y;
+  int texels[4];
+  float texel_w[4];
+  const int texel_count = prt_texel_samples(res, uv, texels, texel_w);
+  int views[4];
+  float view_w[4];
+  int view_count = 4;
+  if (info.z) {
+    // Every view holds the same values (Btf::view_independent): one vector per texel.
+    views[0] = 0;
+    view_w[0] = 1.0f;
+    view_count = 1;
+  } else {
+    prt_view_samples(side, view, views, view_w);
+  }
+  const ulong vcount = (ulong)side * (ulong)side;
+  int n = 0;
+  for (int t = 0; t < texel_count; ++t) {
+    for (int k = 0; k < view_count; ++k) {
+      const float w = texel_w[t] * view_w[k];
+      if (w == 0.0f) continue;
+      m->offsets[n] = base + ((ulong)texels[t] * vcount + (ulong)views[k]) * (ulong)PRT_CH;
+      m->weights[n] = w;
+      ++n;
+    }
+  }
+  m->n = n;
+}
+
+void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,
+                        float4* b2 PRT_MATERIAL_PARAMS) {
+  float4 s0 = (float4)(0.0f), s1 = (float4)(0.0f), s2 = (float4)(0.0f);
+  for (int p = 0; p < m->n; ++p) {
+    __global const float* q = full_btf + m->offsets[p] + c;
+    const float w = m->weights[p];
+    s0 += w * vload4(0, q);
+    s1 += w * vload4(1, q);
+    s2 += w * vload4(2, q);
+  }
+  *b0 = s0;
+  *b1 = s1;
+  *b2 = s2;
+}
+
+float prt_material_one(const prt_material* m, int c PRT_MATERIAL_PARAMS) {
+  float s = 0.0f;
+  for (int p = 0; p < m->n; ++p) s += m->weights[p] * full_btf[m->offsets[p] + c];
+  return s;
+}

@@ -1,0 +1,71 @@
+#include <map>
+#include <vector>
+
+#include "full/full.h"
+#include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_runtime.h"
+
+namespace prt::full {
+namespace {
+
+class FullDeviceMaterial final : public DeviceMaterial {
+ public:
+  FullDeviceMaterial(ClContext& context, std::span<const FullMaterial* const> parts) {
+    // Distinct BTFs once each, in part order, into one buffer.
+    std::map<const Btf*, std::uint64_t> offset_of;
+    std::vector<const Btf*> order;
+    std::uint64_t total = 0;
+    for (const FullMaterial* p : parts) {
+      const Btf* b = &p->btf();
+      if (offset_of.emplace(b, total).second) {
+        order.push_back(b);
+        total += b->value_count();
+      }
+    }
+    data_ = make_buffer(context, total * sizeof(float), CL_MEM_READ_ONLY, "full material BTFs");
+    for (const Btf* b : order)
+      write_buffer(context, data_, b->data().data(), b->bytes(), "full material BTFs",
+                   offset_of.at(b) * sizeof(float));
+    std::vector<cl_ulong> offsets;
+    std::vector<cl_int4> info;
+    for (const FullMaterial* p : parts) {
+      const Btf& b = p->btf();
+      offsets.push_back(offset_of.at(&b));
+      info.push_back(cl_int4{{b.resolution(), b.view_side(), b.view_independent() ? 1 : 0, 0}});
+      views_read_.push_back(b.view_independent() ? 1 : 4);
+    }
+    m_ = parts.front()->btf().light_count();
+    part_offset_ = upload(context, std::span<const cl_ulong>(offsets), "full material offsets");
+    part_info_ = upload(context, std::span<const cl_int4>(info), "full material part table");
+    bytes_ =
+        total * sizeof(float) + offsets.size() * sizeof(cl_ulong) + info.size() * sizeof(cl_int4);
+  }
+
+  std::string label() const override { return "full_material.cl"; }
+  std::string source() const override { return std::string(kernel_source("full_material")); }
+  void set_args(cl::Kernel& kernel, unsigned first) const override {
+    set_args_from(kernel, first, data_, part_offset_, part_info_);
+  }
+  std::uint64_t device_bytes() const override { return bytes_; }
+  std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const override {
+    const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
+    return texels * static_cast<std::uint64_t>(views_read_.at(part)) *
+           static_cast<std::uint64_t>(m_) * 3 * sizeof(float);
+  }
+
+ private:
+  cl::Buffer data_, part_offset_, part_info_;
+  std::vector<int> views_read_;  // view vectors a hit pixel of each part reads per texel
+  int m_ = 0;
+  std::uint64_t bytes_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<DeviceMaterial> upload_full(ClContext& context,
+                                            std::span<const FullMaterial* const> parts) {
+  PRT_CHECK(!parts.empty(), "material full: no parts to upload");
+  return std::make_unique<FullDeviceMaterial>(context, parts);
+}
+
+}  // namespace prt::full

@@ -1,0 +1,28 @@
+#include "render/shading_program.h"
+
+#include <fmt/format.h>
+
+#include <string>
+
+#include "prtlab/opencl/cl_kernel_sources.h"
+#include "prtlab/opencl/cl_program.h"
+
+namespace prt {
+
+cl::Program build_shading_program(ClContext& context, const DeviceMaterial& material, int m,
+                                  TexelFilter filter) {
+  KernelDefines defines = material.defines();
+  defines.set("PRT_WG_SIZE", kShadingWorkGroup)
+      .set("PRT_M", m)
+      .set("PRT_BILINEAR", filter == TexelFilter::kBilinear ? 1 : 0);
+  const std::string label = material.label();
+  // #line markers keep the compiler's messages pointing at each file's own lines.
+  std::string source(kernel_source("btf_lookup"));
+  source += fmt::format("\n#line 1 \"{}\"\n", label);
+  source += material.source();
+  source += "\n#line 1 \"btf_shading.cl\"\n";
+  source += kernel_source("btf_shading");
+  return build_program_source(context, "btf_lookup.cl", source, defines);
+}
+
+}  // namespace prt
