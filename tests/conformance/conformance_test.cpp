@@ -44,6 +44,7 @@
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/radiance_to_bins.h"
+#include "support/conformance_helpers.h"
 #include "support/temp_dir.h"
 #include "support/test_plugins.h"
 
@@ -101,9 +102,7 @@ std::vector<CaseParam> all_case_params() {
 }
 
 std::string sanitize(std::string s) {
-  for (char& ch : s)
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  return s;
+  return testing::sanitize_name(std::move(s));
 }
 
 // ---- helpers ----
@@ -171,19 +170,7 @@ double declared_norm_error(const CompressedTransfer& ct, const LocalRadiance& a,
          << what << " error " << error << " > tolerance " << tolerance;
 }
 
-::testing::AssertionResult same_storage(const StorageReport& a, const StorageReport& b) {
-  if (a.components.size() != b.components.size())
-    return ::testing::AssertionFailure()
-           << a.components.size() << " vs " << b.components.size() << " components";
-  for (std::size_t i = 0; i < a.components.size(); ++i) {
-    const auto &x = a.components[i], &y = b.components[i];
-    if (x.name != y.name || x.bytes != y.bytes || x.layout != y.layout)
-      return ::testing::AssertionFailure()
-             << "component " << i << ": " << x.name << " " << x.bytes << " B (" << x.layout
-             << ") vs " << y.name << " " << y.bytes << " B (" << y.layout << ")";
-  }
-  return ::testing::AssertionSuccess();
-}
+using testing::same_storage;
 
 std::vector<std::byte> file_bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -194,52 +181,13 @@ std::vector<std::byte> file_bytes(const fs::path& p) {
 }
 
 // A scratch file removed at scope exit.
-struct TempFile {
-  fs::path path;
-  explicit TempFile(const std::string& stem) : path(g_cache_root / (sanitize(stem) + ".prt")) {}
-  ~TempFile() {
-    std::error_code ec;
-    fs::remove(path, ec);
-  }
+struct TempFile : testing::ScratchFile {
+  explicit TempFile(const std::string& stem) : ScratchFile(g_cache_root, stem) {}
 };
 
 // Every combination of the device options (CompressorEntry::device_params) of a backend.
 std::vector<Params> device_param_sets(const CompressorEntry& entry) {
-  std::vector<Params> sets{{}};
-  for (const auto& spec : entry.device_params) {
-    std::vector<std::string> values;
-    switch (spec.type) {
-      case prt::ParamType::kString:
-      case prt::ParamType::kEnum:
-        values = spec.choices;
-        break;
-      case prt::ParamType::kBool:
-        values = {"false", "true"};
-        break;
-      case prt::ParamType::kInt:
-        values.push_back(spec.default_value);
-        if (spec.min) values.push_back(fmt::format("{}", static_cast<long long>(*spec.min)));
-        if (spec.max) values.push_back(fmt::format("{}", static_cast<long long>(*spec.max)));
-        break;
-      case prt::ParamType::kReal:
-        values.push_back(spec.default_value);
-        if (spec.min) values.push_back(fmt::format("{}", *spec.min));
-        if (spec.max) values.push_back(fmt::format("{}", *spec.max));
-        break;
-    }
-    std::sort(values.begin(), values.end());
-    values.erase(std::unique(values.begin(), values.end()), values.end());
-    if (values.empty()) continue;
-    std::vector<Params> next;
-    for (const auto& s : sets)
-      for (const auto& v : values) {
-        Params p = s;
-        p[spec.key] = v;
-        next.push_back(std::move(p));
-      }
-    sets = std::move(next);
-  }
-  return sets;
+  return testing::device_option_sets(entry.device_params);
 }
 
 std::string describe(const Params& p) {

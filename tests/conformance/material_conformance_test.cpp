@@ -41,6 +41,7 @@
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/device_material_eval.h"
 #include "prtlab/storage/archive.h"
+#include "support/conformance_helpers.h"
 #include "support/random_directions.h"
 #include "support/temp_dir.h"
 #include "support/test_plugins.h"
@@ -125,9 +126,7 @@ std::vector<CaseParam> all_case_params() {
 }
 
 std::string sanitize(std::string s) {
-  for (char& ch : s)
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  return s;
+  return testing::sanitize_name(std::move(s));
 }
 
 // ---- helpers ----
@@ -195,67 +194,21 @@ bool bit_identical(std::span<const Rgb> a, std::span<const Rgb> b) {
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Rgb)) == 0);
 }
 
-::testing::AssertionResult same_storage(const StorageReport& a, const StorageReport& b) {
-  if (a.components.size() != b.components.size())
-    return ::testing::AssertionFailure()
-           << a.components.size() << " vs " << b.components.size() << " components";
-  for (std::size_t i = 0; i < a.components.size(); ++i) {
-    const auto &x = a.components[i], &y = b.components[i];
-    if (x.name != y.name || x.bytes != y.bytes || x.layout != y.layout)
-      return ::testing::AssertionFailure() << "component " << i << ": " << x.name << " " << x.bytes
-                                           << " B vs " << y.name << " " << y.bytes;
-  }
-  return ::testing::AssertionSuccess();
-}
+using testing::same_storage;
 
 std::vector<char> file_bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-struct TempFile {
-  fs::path path;
-  explicit TempFile(const std::string& stem) : path(g_cache_root / (sanitize(stem) + ".prt")) {}
-  ~TempFile() {
-    std::error_code ec;
-    fs::remove(path, ec);
-  }
+struct TempFile : testing::ScratchFile {
+  explicit TempFile(const std::string& stem) : ScratchFile(g_cache_root, stem) {}
 };
 
 // Every combination of a material's device options (choices, bools, integer range ends and
 // default), as the transfer suite does.
 std::vector<Params> device_param_sets(const MaterialEntry& entry) {
-  std::vector<Params> sets{{}};
-  for (const auto& spec : entry.device_params) {
-    std::vector<std::string> values;
-    switch (spec.type) {
-      case prt::ParamType::kString:
-      case prt::ParamType::kEnum:
-        values = spec.choices;
-        break;
-      case prt::ParamType::kBool:
-        values = {"false", "true"};
-        break;
-      case prt::ParamType::kInt:
-      case prt::ParamType::kReal:
-        values.push_back(spec.default_value);
-        if (spec.min) values.push_back(fmt::format("{}", static_cast<long long>(*spec.min)));
-        if (spec.max) values.push_back(fmt::format("{}", static_cast<long long>(*spec.max)));
-        break;
-    }
-    std::sort(values.begin(), values.end());
-    values.erase(std::unique(values.begin(), values.end()), values.end());
-    if (values.empty()) continue;
-    std::vector<Params> next;
-    for (const auto& s : sets)
-      for (const auto& v : values) {
-        Params p = s;
-        p[spec.key] = v;
-        next.push_back(std::move(p));
-      }
-    sets = std::move(next);
-  }
-  return sets;
+  return testing::device_option_sets(entry.device_params);
 }
 
 // ---- per material x BTF ----
