@@ -18,8 +18,18 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   libxxhash-dev libstb-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib python3-pip
+  python3 python3-matplotlib python3-numpy python3-scipy python3-pip
 )
+# A backend folder that needs a Debian package of its own lists it in <folder>/packages.txt
+# (one name per line, '#' comments), so adding a backend edits nothing outside its folder.
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+for list in "$ROOT"/compressors/*/packages.txt; do
+  [[ -f "$list" ]] || continue
+  while read -r line; do
+    line="${line%%#*}"
+    for p in $line; do PACKAGES+=("$p"); done
+  done < "$list"
+done
 
 want_packages=1
 want_data=1
