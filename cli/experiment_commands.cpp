@@ -1,12 +1,16 @@
-// prtlab experiment table1|table2: regenerate the central paper's tables (docs/experiments.md).
+// prtlab experiment table1|table2|run|report|all|list: the papers' tables and the experiment files
+// (docs/experiments.md).
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 
 #include "commands.h"
+#include "experiment_report.h"
+#include "experiment_run.h"
+#include "experiment_spec.h"
 #include "paper_table.h"
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "table_report.h"
 
@@ -31,41 +35,9 @@ std::string command_line_from_provenance() {
   return provenance().value("command", std::string());
 }
 
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-// The plot script needs matplotlib; a pyenv or venv python3 on PATH often lacks it while the
-// distribution's has it, so try $PRTLAB_PYTHON, then /usr/bin/python3, then python3.
-std::optional<std::string> python_with_matplotlib() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("PRTLAB_PYTHON"); env && *env) candidates.emplace_back(env);
-  candidates.emplace_back("/usr/bin/python3");
-  candidates.emplace_back("python3");
-  for (const auto& py : candidates) {
-    const std::string probe = shell_quote(py) + " -c 'import matplotlib' >/dev/null 2>&1";
-    if (std::system(probe.c_str()) == 0) return py;
-  }
-  return std::nullopt;
-}
-
 void plot(const std::filesystem::path& out_dir, bool quiet) {
-  const auto script = std::filesystem::path(build_info().source_dir) / "scripts" / "plot_tables.py";
-  const std::string args = " " + shell_quote(out_dir.string());
-  const auto py = python_with_matplotlib();
-  if (!py || !std::filesystem::exists(script)) {
-    std::fprintf(stderr,
-                 "prtlab: no plot (needs python3 with matplotlib, package python3-matplotlib); "
-                 "run: python3 scripts/plot_tables.py%s\n",
-                 args.c_str());
-    return;
-  }
-  const std::string cmd = shell_quote(*py) + " " + shell_quote(script.string()) + args +
-                          (quiet ? " >/dev/null" : " >&2");
-  if (std::system(cmd.c_str()) != 0)
-    std::fprintf(stderr, "prtlab: warning: the plot script failed: %s\n", cmd.c_str());
+  (void)experiments::run_plot_script("plot_tables.py", experiments::shell_quote(out_dir.string()),
+                                     quiet);
 }
 
 void run_table(const TableCli& o) {
@@ -110,6 +82,131 @@ void run_table(const TableCli& o) {
   std::printf("\n");
 }
 
+struct RunCli {
+  std::string experiment;
+  std::string variant;
+  bool quick = false;
+  std::string out = "results";
+  bool force = false;
+  bool recompute = false;
+  bool plot = true;
+  bool json = false;
+  std::vector<std::string> scenes;
+};
+
+std::vector<std::string> registered_backends() {
+  return CompressorRegistry::instance().names();
+}
+
+std::string variant_of(const RunCli& o) {
+  if (o.quick && !o.variant.empty() && o.variant != "quick")
+    throw ParameterError("give either --quick or --variant");
+  return o.quick ? "quick" : o.variant;
+}
+
+experiments::RunSummary run_one(const std::filesystem::path& file, const std::string& variant,
+                                const RunCli& o, ClContext* device) {
+  const auto& g = global_options();
+  const auto spec = experiments::parse_experiment(file, variant, registered_backends());
+  experiments::RunOptions ro;
+  ro.out_root = o.out;
+  ro.force = o.force;
+  ro.recompute = o.recompute;
+  ro.device = device;
+  ro.scenes = o.scenes;
+  ro.show_progress_bars = !g.quiet;
+  ro.command_line = command_line_from_provenance();
+  if (!g.quiet)
+    ro.on_progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  auto summary = experiments::run_experiment(spec, ro);
+  experiments::write_experiment_report(summary.folder, o.plot, g.quiet);
+  return summary;
+}
+
+void print_run(const experiments::RunSummary& s, bool json) {
+  if (json) {
+    auto j = s.result;
+    j["folder"] = s.folder.string();
+    j["resumed"] = s.resumed;
+    print_json(std::move(j));
+    return;
+  }
+  std::printf("wrote %s (README.md, result.json, points.csv, errors.csv%s)\n",
+              s.folder.string().c_str(),
+              std::filesystem::exists(s.folder / "images") ? ", images/" : "");
+}
+
+void run_file(const RunCli& o) {
+  const auto file = experiments::resolve_experiment(o.experiment);
+  const std::string variant = variant_of(o);
+  // Parse before opening a device: a typo in the file costs nothing.
+  (void)experiments::parse_experiment(file, variant, registered_backends());
+  auto ctx = open_device_from_options();
+  print_run(run_one(file, variant, o, ctx ? &*ctx : nullptr), o.json);
+}
+
+void run_all(const RunCli& o) {
+  const std::string variant = variant_of(o);
+  auto ctx = open_device_from_options();
+  // The paper's tables first (on the bunny alone for --quick), then every experiment file.
+  for (const char* name : {"table1", "table2"}) {
+    TableCli t;
+    t.table = name;
+    t.out = o.out;
+    t.force = o.recompute;
+    t.plot = o.plot;
+    if (o.quick) t.scenes = {"bunny"};
+    if (!o.scenes.empty()) t.scenes = o.scenes;
+    if (!global_options().quiet) std::fprintf(stderr, "== experiment %s\n", name);
+    run_table(t);
+  }
+  for (const auto& file : experiments::experiment_files()) {
+    const auto variants = experiments::experiment_variants(file);
+    std::string v = variant;
+    if (!v.empty() && std::find(variants.begin(), variants.end(), v) == variants.end()) v = "";
+    if (!global_options().quiet)
+      std::fprintf(stderr, "== experiment %s%s\n", file.stem().string().c_str(),
+                   v.empty() ? "" : (" (" + v + ")").c_str());
+    print_run(run_one(file, v, o, ctx ? &*ctx : nullptr), false);
+  }
+}
+
+void list_experiments(bool json) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& file : experiments::experiment_files()) {
+    const auto spec = experiments::parse_experiment(file, "", registered_backends());
+    list.push_back({{"name", spec.name},
+                    {"title", spec.title},
+                    {"file", file.string()},
+                    {"kind", experiments::to_string(spec.kind)},
+                    {"variants", experiments::experiment_variants(file)}});
+  }
+  if (json) {
+    print_json({{"experiments", list}});
+    return;
+  }
+  std::printf("table1      the central paper's Table I (prtlab experiment table1)\n");
+  std::printf("table2      the central paper's Table II (prtlab experiment table2)\n");
+  for (const auto& e : list) {
+    std::string v;
+    for (const auto& x : e["variants"]) v += (v.empty() ? "" : ", ") + x.get<std::string>();
+    std::printf("%-11s %s [%s; variants: %s] %s\n", e["name"].get<std::string>().c_str(),
+                e["title"].get<std::string>().c_str(), e["kind"].get<std::string>().c_str(),
+                v.empty() ? "none" : v.c_str(), e["file"].get<std::string>().c_str());
+  }
+}
+
+void add_run_options(CLI::App* c, RunCli& o) {
+  c->add_flag("--quick", o.quick, "Run the file's [variant.quick] (seconds to minutes)");
+  c->add_option("--out", o.out, "Root of the result folders")->capture_default_str();
+  c->add_flag("--force", o.force, "Overwrite a complete result folder");
+  c->add_flag("--recompute", o.recompute,
+              "Recompute every stage (T, compressions, points) instead of using the stage cache");
+  c->add_option("--scenes", o.scenes, "Replace the experiment's scenes (names or .toml paths)")
+      ->delimiter(',');
+  c->add_flag("!--no-plot", o.plot, "Do not run scripts/plot_experiment.py");
+}
+
 }  // namespace
 
 void add_experiment_commands(CLI::App& app) {
@@ -146,6 +243,38 @@ void add_experiment_commands(CLI::App& app) {
     c->add_flag("!--no-plot", o->plot, "Do not run scripts/plot_tables.py");
     c->callback([o] { run_table(*o); });
   }
+
+  auto ro = std::make_shared<RunCli>();
+  auto* run = exp->add_subcommand(
+      "run", "Run an experiment file (experiments/<name>.toml) into results/<name>/");
+  run->add_option("experiment", ro->experiment, "Experiment name (prtlab experiment list) or path")
+      ->required();
+  run->add_option("--variant", ro->variant, "A [variant.NAME] of the file (quick, full)");
+  add_run_options(run, *ro);
+  run->add_flag("--json", ro->json, "Print result.json");
+  run->callback([ro] { run_file(*ro); });
+
+  auto rep = std::make_shared<std::pair<std::string, bool>>("", true);
+  auto* report = exp->add_subcommand(
+      "report", "Redraw a result folder's README.md and plots from its result.json");
+  report->add_option("folder", rep->first, "A result folder (results/fig6)")->required();
+  report->add_flag("!--no-plot", rep->second, "Only README.md");
+  report->callback([rep] {
+    experiments::write_experiment_report(rep->first, rep->second, global_options().quiet);
+    std::printf("wrote %s/README.md\n", rep->first.c_str());
+  });
+
+  auto ao = std::make_shared<RunCli>();
+  auto* all = exp->add_subcommand(
+      "all", "Regenerate every table and figure: table1, table2 and every experiment file");
+  add_run_options(all, *ao);
+  all->add_option("--variant", ao->variant, "Variant of each file that declares it");
+  all->callback([ao] { run_all(*ao); });
+
+  auto lj = std::make_shared<bool>(false);
+  auto* list = exp->add_subcommand("list", "The experiments there are");
+  list->add_flag("--json", *lj, "Machine-readable");
+  list->callback([lj] { list_experiments(*lj); });
 }
 
 }  // namespace prt::cli

@@ -1,0 +1,372 @@
+#include "experiment_report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "prtlab/base/build_info.h"
+#include "prtlab/base/error.h"
+#include "prtlab/storage/atomic_file.h"
+
+namespace prt::experiments {
+namespace {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+double num(const json& v) {
+  return v.is_number() ? v.get<double>() : NAN;
+}
+
+std::string fmt_num(const json& v, const char* spec = "{:.3g}") {
+  if (!v.is_number()) return "n/a";
+  return fmt::format(fmt::runtime(spec), v.get<double>());
+}
+
+std::string fmt_ms(const json& v) {
+  return v.is_number() ? fmt::format("{:.3f}", v.get<double>()) : "n/a";
+}
+
+std::string fmt_err(const json& v) {
+  if (!v.is_number()) return "n/a";
+  const double x = v.get<double>();
+  return x == 0 ? "0" : fmt::format("{:.3g}", x);
+}
+
+std::string params_cell(const json& p) {
+  std::string s = p.is_string() ? p.get<std::string>() : "";
+  // seed is every backend's and rarely interesting; keep the table narrow.
+  std::string out;
+  std::size_t start = 0;
+  while (start <= s.size()) {
+    const std::size_t end = std::min(s.find(';', start), s.size());
+    const std::string kv = s.substr(start, end - start);
+    if (!kv.empty() && !kv.starts_with("seed=")) out += (out.empty() ? "" : ", ") + kv;
+    start = end + 1;
+  }
+  return out.empty() ? "defaults" : "`" + out + "`";
+}
+
+std::vector<const json*> points_of(const json& result, const std::string& scene) {
+  std::vector<const json*> out;
+  for (const auto& p : result.at("points"))
+    if (p.at("scene") == scene) out.push_back(&p);
+  return out;
+}
+
+std::string paper_cell(const json& result, const std::string& backend) {
+  const json& paper = result.at("paper");
+  return paper.contains(backend) ? paper.at(backend).get<std::string>() : "";
+}
+
+std::optional<json> load_json(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) return std::nullopt;
+  try {
+    return json::parse(in);
+  } catch (const json::exception&) {
+    return std::nullopt;
+  }
+}
+
+// SSIM per (scene, backend, environment, view) from perceptual.json, when the plot script
+// wrote one.
+std::map<std::string, double> ssim_table(const fs::path& folder) {
+  std::map<std::string, double> out;
+  const auto j = load_json(folder / "perceptual.json");
+  if (!j || !j->contains("ssim")) return out;
+  for (const auto& e : j->at("ssim"))
+    out[e.at("image").get<std::string>()] = e.at("ssim").get<double>();
+  return out;
+}
+
+void equal_storage_section(std::string& md, const json& result, const json& scene,
+                           const fs::path& folder) {
+  const std::string name = scene.at("scene");
+  const double target = num(scene.at("target_bytes"));
+  const double tol = result.at("experiment").at("target").at("tolerance").get<double>();
+  md += fmt::format("## {} at equal storage\n\n", name);
+  md += fmt::format(
+      "Target: {:.3f} MB ({}), each backend's size knob searched to within {:.0f} %. Scene: {} "
+      "vertices, M = {}, N = {}, nnz(T) = {}.\n\n",
+      target / 1e6,
+      scene.at("target_backend").is_string()
+          ? "the storage of `" + scene.at("target_backend").get<std::string>() + "` on this scene"
+          : std::string("fixed by the experiment file"),
+      100 * tol, scene.at("vertices").get<std::size_t>(), scene.at("M").get<int>(),
+      scene.at("N").get<int>(), scene.at("nnz").get<std::uint64_t>());
+  const auto ssim = ssim_table(folder);
+  md +=
+      "| backend | parameters | storage MB | / target | reached | compress s | MFLOPs | "
+      "relight ms C++ | relight ms OpenCL | L* rel. L2 mean | L* rel. L2 max | Frobenius rel. | "
+      "image rel. L2 | PSNR dB |";
+  if (!ssim.empty()) md += " SSIM |";
+  md += " paper |\n|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
+  if (!ssim.empty()) md += "---:|";
+  md += "---|\n";
+  for (const json* p : points_of(result, name)) {
+    const std::string backend = p->at("backend");
+    std::string ssim_cell;
+    if (!ssim.empty() && p->contains("images") && !p->at("images").empty()) {
+      double sum = 0;
+      int n = 0;
+      for (const auto& im : p->at("images"))
+        if (auto it = ssim.find(im.at("image").get<std::string>()); it != ssim.end())
+          sum += it->second, ++n;
+      ssim_cell = n ? fmt::format("{:.4f}", sum / n) : "n/a";
+    }
+    md += fmt::format(
+        "| `{}` | {} | {:.3f} | {:.3f} | {} | {} | {:.2f} | {} | {} | {} | {} | {} | {} | {} |",
+        backend, params_cell(p->at("params")), num(p->at("storage_bytes")) / 1e6,
+        num(p->at("storage_ratio")), p->at("reached").get<bool>() ? "yes" : "**no**",
+        fmt_num(p->at("compress_seconds"), "{:.2f}"), num(p->at("flops_per_relight")) / 1e6,
+        fmt_ms(p->at("relight_ms_cpp")), fmt_ms(p->at("relight_ms_opencl")),
+        fmt_err(p->at("lstar_rel_l2_mean")), fmt_err(p->at("lstar_rel_l2_max")),
+        fmt_err(p->at("frobenius_rel")), fmt_err(p->at("image_rel_l2_mean")),
+        fmt_num(p->at("image_psnr_db_mean"), "{:.1f}"));
+    if (!ssim.empty()) md.append(" ").append(ssim_cell).append(" |");
+    md.append(" ").append(paper_cell(result, backend)).append(" |\n");
+  }
+  md += "\n";
+
+  // The winner among the backends that reached the target.
+  std::vector<const json*> reached;
+  for (const json* p : points_of(result, name))
+    if (p->at("reached").get<bool>() && p->at("lstar_rel_l2_mean").is_number())
+      reached.push_back(p);
+  std::sort(reached.begin(), reached.end(), [](const json* a, const json* b) {
+    return num(a->at("lstar_rel_l2_mean")) < num(b->at("lstar_rel_l2_mean"));
+  });
+  if (reached.empty()) {
+    md += "No backend reached the target storage.\n\n";
+  } else if (reached.size() == 1) {
+    md += fmt::format("Only `{}` reached the target storage.\n\n",
+                      reached[0]->at("backend").get<std::string>());
+  } else {
+    const double e0 = num(reached[0]->at("lstar_rel_l2_mean"));
+    const double e1 = num(reached[1]->at("lstar_rel_l2_mean"));
+    md += fmt::format(
+        "**Lowest error at equal storage: `{}`** (mean relative L2 of L* {}), {} the runner-up "
+        "`{}` ({}).\n\n",
+        reached[0]->at("backend").get<std::string>(), fmt_err(reached[0]->at("lstar_rel_l2_mean")),
+        e0 > 0 ? fmt::format("{:.3g}x lower than", e1 / e0)
+               : std::string("exact (to float rounding), against"),
+        reached[1]->at("backend").get<std::string>(), fmt_err(reached[1]->at("lstar_rel_l2_mean")));
+  }
+  std::string unreached;
+  for (const auto& s : result.at("searches"))
+    if (s.at("scene") == name && s.at("reached") != true)
+      unreached += fmt::format("- `{}`: {}\n", s.at("backend").get<std::string>(),
+                               s.value("note", std::string()).empty()
+                                   ? fmt::format("storage {:.3f} x the target", num(s.at("ratio")))
+                                   : s.at("note").get<std::string>());
+  if (!unreached.empty()) md += "Backends that did not reach the target:\n\n" + unreached + "\n";
+  md += "Searches (compressions spent, knob value found):\n\n";
+  for (const auto& s : result.at("searches"))
+    if (s.at("scene") == name && s.contains("probes"))
+      md += fmt::format("- `{}`: {} = {} after {} compressions ({:.3f} MB)\n",
+                        s.at("backend").get<std::string>(), s.at("knob").get<std::string>(),
+                        s.at("value").get<std::string>(), s.at("probes").size(),
+                        num(s.at("bytes")) / 1e6);
+  md += "\n";
+  const std::string fig = fmt::format("figure-{}.png", name);
+  if (fs::exists(folder / fig))
+    md += fmt::format(
+        "![images and error maps at equal storage]({})\n\nImages at the exact "
+        "image's exposure; error maps: per-pixel relative error, one colour scale "
+        "for all backends (viridis, 0 to the largest 99th percentile).\n\n",
+        fig);
+}
+
+void sweep_section(std::string& md, const json& result, const json& scene, const fs::path& folder) {
+  const std::string name = scene.at("scene");
+  md += fmt::format("## {}\n\n", name);
+  md += fmt::format(
+      "{} vertices, M = {}, N = {}, nnz(T) = {}; T {} ({:.1f} s when computed).\n\n",
+      scene.at("vertices").get<std::size_t>(), scene.at("M").get<int>(), scene.at("N").get<int>(),
+      scene.at("nnz").get<std::uint64_t>(),
+      scene.at("transfer_cache_hit").get<bool>() ? "from the stage cache" : "computed in this run",
+      num(scene.at("transfer_seconds")));
+  const bool fps = result.at("experiment").at("fps").get<bool>();
+  md +=
+      "| backend | parameters | storage MB | computation % | compress s | relight ms C++ | "
+      "relight ms OpenCL | L* rel. L2 mean | L* rel. L2 max | image rel. L2 | PSNR dB |";
+  if (fps) md += " fps view | fps light |";
+  md += " front (time / storage) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
+  if (fps) md += "---:|---:|";
+  md += "---|\n";
+  for (const json* p : points_of(result, name)) {
+    md += fmt::format("| `{}` | {} | {:.3f} | {:.2f} | {} | {} | {} | {} | {} | {} | {} |",
+                      p->at("backend").get<std::string>(), params_cell(p->at("params")),
+                      num(p->at("storage_bytes")) / 1e6, num(p->at("computation_percent")),
+                      fmt_num(p->at("compress_seconds"), "{:.2f}"), fmt_ms(p->at("relight_ms_cpp")),
+                      fmt_ms(p->at("relight_ms_opencl")), fmt_err(p->at("lstar_rel_l2_mean")),
+                      fmt_err(p->at("lstar_rel_l2_max")), fmt_err(p->at("image_rel_l2_mean")),
+                      fmt_num(p->at("image_psnr_db_mean"), "{:.1f}"));
+    if (fps)
+      md += fmt::format(" {} | {} |", fmt_num(p->at("fps_view"), "{:.1f}"),
+                        fmt_num(p->at("fps_light"), "{:.1f}"));
+    md += fmt::format(" {} / {} |\n", p->at("pareto_time") == true ? "yes" : "",
+                      p->at("pareto_storage") == true ? "yes" : "");
+  }
+  md += "\n";
+  const std::string plot = fmt::format("pareto-{}.png", name);
+  if (fs::exists(folder / plot))
+    md += fmt::format("![error against relight time and storage]({})\n\n", plot);
+}
+
+// A sweep over scene variants (the paper's Fig. 8): one row per variant and backend.
+void scaling_section(std::string& md, const json& result, const fs::path& folder) {
+  const json& grid = result.at("experiment").at("scene_grid");
+  if (grid.empty()) return;
+  md += "## Scaling over scene variants\n\n";
+  std::string keys;
+  for (const auto& [k, _] : grid.items()) keys += (keys.empty() ? "" : ", ") + k;
+  md += fmt::format(
+      "Swept: {}. Storage relative to the first variant of the same base scene "
+      "and backend.\n\n",
+      keys);
+  md +=
+      "| scene | backend | storage MB | x first | computation % | compress s | fps view | "
+      "fps light |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
+  std::map<std::pair<std::string, std::string>, double> first;
+  std::map<std::string, std::string> base_of;
+  for (const auto& s : result.at("scenes")) base_of[s.at("scene")] = s.at("base");
+  for (const auto& p : result.at("points")) {
+    const auto key = std::pair{base_of[p.at("scene")], p.at("backend").get<std::string>()};
+    const double mb = num(p.at("storage_bytes")) / 1e6;
+    if (!first.contains(key)) first[key] = mb;
+    md += fmt::format("| {} | `{}` | {:.3f} | {:.2f} | {:.2f} | {} | {} | {} |\n",
+                      p.at("scene").get<std::string>(), p.at("backend").get<std::string>(), mb,
+                      mb / first[key], num(p.at("computation_percent")),
+                      fmt_num(p.at("compress_seconds"), "{:.2f}"),
+                      fmt_num(p.at("fps_view"), "{:.1f}"), fmt_num(p.at("fps_light"), "{:.1f}"));
+  }
+  md += "\n";
+  if (fs::exists(folder / "scaling.png"))
+    md += "![storage and frame rate against the swept setting](scaling.png)\n\n";
+}
+
+}  // namespace
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::optional<std::string> python_with_matplotlib() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("PRTLAB_PYTHON"); env && *env) candidates.emplace_back(env);
+  candidates.emplace_back("/usr/bin/python3");
+  candidates.emplace_back("python3");
+  for (const auto& py : candidates) {
+    const std::string probe = shell_quote(py) + " -c 'import matplotlib' >/dev/null 2>&1";
+    if (std::system(probe.c_str()) == 0) return py;
+  }
+  return std::nullopt;
+}
+
+bool run_plot_script(const std::string& script, const std::string& args, bool quiet) {
+  const auto path = fs::path(build_info().source_dir) / "scripts" / script;
+  const auto py = python_with_matplotlib();
+  if (!py || !fs::exists(path)) {
+    std::fprintf(stderr,
+                 "prtlab: no plot (needs python3 with matplotlib, package python3-matplotlib); "
+                 "run: python3 scripts/%s %s\n",
+                 script.c_str(), args.c_str());
+    return false;
+  }
+  const std::string cmd = shell_quote(*py) + " " + shell_quote(path.string()) + " " + args +
+                          (quiet ? " >/dev/null" : " >&2");
+  if (std::system(cmd.c_str()) != 0) {
+    std::fprintf(stderr, "prtlab: warning: the plot script failed: %s\n", cmd.c_str());
+    return false;
+  }
+  return true;
+}
+
+std::string render_experiment_markdown(const json& result, const fs::path& folder) {
+  const json& e = result.at("experiment");
+  const json& prov = result.at("provenance");
+  std::string md;
+  md += fmt::format("# {}\n\n", e.at("title").get<std::string>());
+  md += fmt::format(
+      "Experiment `{}`{} ({}), from `{}`. Written by `prtlab experiment run`; redraw with "
+      "`prtlab experiment report {}` (docs/experiments.md).\n\n",
+      e.at("name").get<std::string>(),
+      e.at("variant").get<std::string>().empty()
+          ? ""
+          : fmt::format(", variant `{}`", e.at("variant").get<std::string>()),
+      e.at("kind").get<std::string>(), e.at("file").get<std::string>(), folder.string());
+  md += "| | |\n|---|---|\n";
+  md += fmt::format("| command | `{}` |\n", prov.value("command", std::string()));
+  md += fmt::format("| provenance | {} |\n", prov.value("summary", std::string()));
+  std::string envs;
+  for (const auto& env : e.at("environments"))
+    envs += (envs.empty() ? "" : ", ") + env.at("name").get<std::string>();
+  md += fmt::format("| environments | {} (the L* error is the mean / max over them) |\n", envs);
+  md += fmt::format(
+      "| images | {} x {}, views: {} |\n", e.at("width").get<int>(), e.at("height").get<int>(),
+      e.at("views").empty() ? std::string("the scene's first") : e.at("views").dump());
+  md += fmt::format("| timing | {} |\n",
+                    e.at("timing").get<bool>()
+                        ? fmt::format("median of {} relights; OpenCL: kernel time from events",
+                                      e.at("repeats").get<int>())
+                        : std::string("off (deterministic run)"));
+  const json& c = result.at("cache");
+  md += fmt::format(
+      "| stage cache | {} points from the cache ({:.1f} s of measuring saved), {} computed "
+      "({:.1f} s); {} stage hits, {} misses |\n\n",
+      c.at("points_from_cache").get<int>(), num(c.at("seconds_saved")),
+      c.at("points_computed").get<int>(), num(c.at("seconds_computing")),
+      c.at("stage_hits").get<int>(), c.at("stage_misses").get<int>());
+
+  for (const auto& scene : result.at("scenes")) {
+    if (e.at("kind") == "equal_storage")
+      equal_storage_section(md, result, scene, folder);
+    else
+      sweep_section(md, result, scene, folder);
+  }
+  scaling_section(md, result, folder);
+
+  if (!result.at("paper").empty()) {
+    md += "## The papers' numbers\n\n";
+    if (!result.at("paper_source").get<std::string>().empty())
+      md += result.at("paper_source").get<std::string>() + "\n\n";
+    md += "| backend | paper |\n|---|---|\n";
+    for (const auto& [k, v] : result.at("paper").items())
+      md += fmt::format("| `{}` | {} |\n", k, v.get<std::string>());
+    md += "\n";
+  }
+  md +=
+      "## Files\n\n"
+      "- `result.json`: everything above and more (spec, provenance, searches, per-environment "
+      "errors, storage components)\n"
+      "- `points.csv`: one row per point, fixed columns (docs/experiments.md)\n"
+      "- `errors.csv`: one row per point, environment and view\n";
+  if (fs::exists(folder / "images")) md += "- `images/`: the kept images and error maps\n";
+  if (fs::exists(folder / "perceptual.json"))
+    md += "- `perceptual.json`: SSIM (scikit-image) of each image against the exact one\n";
+  return md;
+}
+
+void write_experiment_report(const fs::path& folder, bool plots, bool quiet) {
+  const auto result = load_json(folder / "result.json");
+  if (!result)
+    throw InputError(folder / "result.json",
+                     "missing or not valid JSON (run the experiment first)");
+  if (plots) run_plot_script("plot_experiment.py", shell_quote(folder.string()), quiet);
+  try {
+    write_text_atomically(folder / "README.md", render_experiment_markdown(*result, folder));
+  } catch (const json::exception& e) {
+    throw InputError(folder / "result.json", fmt::format("not a prtlab result: {}", e.what()));
+  }
+}
+
+}  // namespace prt::experiments

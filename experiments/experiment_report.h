@@ -1,0 +1,36 @@
+#pragma once
+// The report of a result folder (experiment_run.h), drawn from its result.json alone, so it can
+// be redrawn without recomputing: the plots (scripts/plot_experiment.py: run time and storage
+// against error with each backend's Pareto front, the equal-storage figure of images and error
+// maps, the scaling plot of scene variants, and SSIM where scikit-image is installed), then
+// README.md: the tables, the papers' numbers beside ours, the winner at equal storage and by how
+// much, and every file the folder holds.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+namespace prt::experiments {
+
+/// The python3 that has matplotlib: $PRTLAB_PYTHON, /usr/bin/python3, then python3 (a pyenv or
+/// venv python3 on PATH often lacks it while the distribution's has it); nullopt when none does.
+std::optional<std::string> python_with_matplotlib();
+
+/// Runs scripts/<script> with `args` (already quoted) under python_with_matplotlib(); prints a
+/// warning naming the command to run by hand when there is no such python or the script fails.
+/// Returns whether it ran and succeeded.
+bool run_plot_script(const std::string& script, const std::string& args, bool quiet);
+
+/// Quotes `s` for /bin/sh.
+std::string shell_quote(const std::string& s);
+
+/// README.md of a result folder from its result.json (and perceptual.json when the plot script
+/// wrote one).
+std::string render_experiment_markdown(const nlohmann::json& result,
+                                       const std::filesystem::path& folder);
+
+/// Plots (unless `plots` is false) and README.md for `folder`. InputError when it holds no
+/// result.json or an unreadable one.
+void write_experiment_report(const std::filesystem::path& folder, bool plots, bool quiet);
+
+}  // namespace prt::experiments

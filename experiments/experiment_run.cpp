@@ -1,0 +1,412 @@
+#include "experiment_run.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+
+#include "pareto_front.h"
+#include "point_measurement.h"
+#include "provenance.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/render/image_error.h"
+#include "prtlab/storage/atomic_file.h"
+#include "result_tables.h"
+#include "scene_variants.h"
+#include "storage_search.h"
+
+namespace prt::experiments {
+namespace {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+std::string format_knob(double v, bool integer) {
+  return integer ? fmt::format("{}", static_cast<std::int64_t>(std::llround(v)))
+                 : fmt::format("{}", v);
+}
+
+std::string duration(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "?";
+  const auto s = static_cast<long long>(std::llround(seconds));
+  if (s < 60) return fmt::format("{}s", s);
+  if (s < 3600) return fmt::format("{}m{:02}s", s / 60, s % 60);
+  return fmt::format("{}h{:02}m", s / 3600, (s / 60) % 60);
+}
+
+// Every combination of a backend's grid, over `fixed` (the spec's params of the backend).
+std::vector<std::map<std::string, std::string>> grid_points(
+    const std::map<std::string, std::vector<std::string>>& grid,
+    const std::map<std::string, std::string>& fixed) {
+  std::vector<std::map<std::string, std::string>> out = {fixed};
+  for (const auto& [key, values] : grid) {
+    std::vector<std::map<std::string, std::string>> next;
+    for (const auto& p : out)
+      for (const auto& v : values) {
+        auto q = p;
+        q[key] = v;
+        next.push_back(std::move(q));
+      }
+    out = std::move(next);
+  }
+  return out;
+}
+
+bool knob_is_int(const CompressorEntry& e) {
+  for (const auto& p : e.params)
+    if (p.key == e.size_knob->key) return p.type == ParamType::kInt;
+  return false;
+}
+
+// The points a sweep measures for one backend.
+std::vector<std::map<std::string, std::string>> sweep_points(const ExperimentSpec& spec,
+                                                             const std::string& backend) {
+  const auto& entry = CompressorRegistry::instance().get(backend);
+  const auto fixed = spec.params.contains(backend) ? spec.params.at(backend)
+                                                   : std::map<std::string, std::string>{};
+  if (spec.grid.contains(backend)) return grid_points(spec.grid.at(backend), fixed);
+  if (!entry.size_knob || fixed.contains(entry.size_knob->key)) return {fixed};
+  std::vector<std::map<std::string, std::string>> out;
+  const bool integer = knob_is_int(entry);
+  for (double v : knob_values(*entry.size_knob, integer, spec.knob_points)) {
+    auto p = fixed;
+    p[entry.size_knob->key] = format_knob(v, integer);
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+double time_of(const json& r) {
+  if (r["relight_ms_opencl"].is_number()) return r["relight_ms_opencl"].get<double>();
+  if (r["relight_ms_cpp"].is_number()) return r["relight_ms_cpp"].get<double>();
+  return NAN;
+}
+double number_or_nan(const json& v) {
+  return v.is_number() ? v.get<double>() : NAN;
+}
+
+// Marks each point on its backend's fronts (per scene): run time and storage against L* error.
+void mark_pareto(json& points) {
+  std::map<std::pair<std::string, std::string>, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    groups[{points[i]["scene"], points[i]["backend"]}].push_back(i);
+  for (const auto& [_, members] : groups) {
+    std::vector<CostError> by_time, by_storage;
+    for (std::size_t i : members) {
+      const double err = number_or_nan(points[i]["lstar_rel_l2_mean"]);
+      by_time.push_back({time_of(points[i]), err});
+      by_storage.push_back({number_or_nan(points[i]["storage_bytes"]), err});
+      points[i]["pareto_time"] = false;
+      points[i]["pareto_storage"] = false;
+    }
+    for (std::size_t k : pareto_front(by_time)) points[members[k]]["pareto_time"] = true;
+    for (std::size_t k : pareto_front(by_storage)) points[members[k]]["pareto_storage"] = true;
+  }
+}
+
+std::string slug(std::string s) {
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  return s;
+}
+
+// The kept images of the points of one scene: tone-mapped PNGs at the exact image's exposure,
+// and false-colour maps of the per-pixel relative error on one scale for all backends (the
+// largest 99th percentile among them), so that the maps compare.
+json write_scene_images(const SceneBench& bench, const std::vector<PointOutcome*>& outcomes,
+                        const fs::path& folder) {
+  const fs::path dir = folder / "images";
+  fs::create_directories(dir);
+  const std::size_t lights = bench.lights.size();
+  json written = json::object();
+  std::vector<double> scales(bench.exact_images.size(), 0.0);
+  for (const auto* o : outcomes)
+    for (std::size_t i = 0; i < o->images.size(); ++i) {
+      auto e = relative_error_map(o->images[i], bench.exact_images[i], bench.masks[i / lights]);
+      std::vector<double> counted;
+      for (std::size_t p = 0; p < e.size(); ++p)
+        if (bench.masks[i / lights][p]) counted.push_back(e[p]);
+      if (counted.empty()) continue;
+      const std::size_t k =
+          static_cast<std::size_t>(0.99 * static_cast<double>(counted.size() - 1));
+      std::nth_element(counted.begin(), counted.begin() + static_cast<std::ptrdiff_t>(k),
+                       counted.end());
+      scales[i] = std::max(scales[i], counted[k]);
+    }
+  json scale_json = json::array();
+  for (std::size_t i = 0; i < bench.exact_images.size(); ++i) {
+    const std::size_t v = i / lights, l = i % lights;
+    const std::string stem = fmt::format("{}-{}-{}", slug(bench.variant.name),
+                                         slug(bench.lights[l].name), slug(bench.view_names[v]));
+    ToneMap tm;
+    tm.auto_exposure = false;
+    tm.exposure = bench.exposure[v];
+    write_png(bench.exact_images[i], dir / (stem + "-exact.png"), tm);
+    if (scales[i] <= 0) scales[i] = 1e-6;
+    scale_json.push_back({{"environment", bench.lights[l].name},
+                          {"view", bench.view_names[v]},
+                          {"exact", "images/" + stem + "-exact.png"},
+                          {"error_scale", scales[i]}});
+    for (auto* o : outcomes) {
+      if (o->images.empty()) continue;
+      const std::string b = slug(o->record["backend"].get<std::string>());
+      const std::string img = stem + "-" + b + ".png", err = stem + "-" + b + "-error.png";
+      write_png(o->images[i], dir / img, tm);
+      write_false_colour_png(
+          error_false_colour(o->images[i], bench.exact_images[i], bench.masks[v], scales[i]),
+          dir / err);
+      o->record["images"].push_back({{"environment", bench.lights[l].name},
+                                     {"view", bench.view_names[v]},
+                                     {"image", "images/" + img},
+                                     {"error_map", "images/" + err},
+                                     {"error_scale", scales[i]}});
+    }
+  }
+  return scale_json;
+}
+
+// Files this runner writes into a result folder (removed by --force before a new run).
+const std::vector<std::string> kOwnedFiles = {"result.json", "points.csv", "errors.csv",
+                                              "README.md",   ".complete",  ".started"};
+
+}  // namespace
+
+fs::path result_folder(const ExperimentSpec& spec, const fs::path& out_root) {
+  return out_root / (spec.variant.empty() || spec.variant == "full"
+                         ? spec.name
+                         : spec.name + "-" + spec.variant);
+}
+
+RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
+  ExperimentSpec spec = spec_in;
+  if (!o.scenes.empty()) spec.scenes = o.scenes;
+  RunSummary summary;
+  summary.folder = result_folder(spec, o.out_root);
+  const fs::path& folder = summary.folder;
+  if (fs::exists(folder / ".complete")) {
+    if (!o.force)
+      throw ParameterError(fmt::format(
+          "{} holds a complete run; pass --force to overwrite it, or redraw its report with "
+          "prtlab experiment report {}",
+          folder.string(), folder.string()));
+    for (const auto& f : kOwnedFiles) fs::remove(folder / f);
+    std::error_code ec;
+    fs::remove_all(folder / "images", ec);
+    for (const auto& e : fs::directory_iterator(folder, ec))
+      if (e.path().extension() == ".png") fs::remove(e.path());
+  }
+  summary.resumed = fs::exists(folder / ".started");
+  fs::create_directories(folder);
+  write_text_atomically(folder / ".started",
+                        "a run of this experiment started here; without "
+                        ".complete beside it, it did not finish\n");
+
+  StageCache cache = o.cache_root ? StageCache(*o.cache_root) : StageCache();
+  const CacheMode mode = o.recompute ? CacheMode::kRefresh : CacheMode::kUse;
+  BenchOptions bo{o.device, mode, o.show_progress_bars};
+  const Provenance prov = collect_provenance(o.command_line, o.device);
+  const auto& registry = CompressorRegistry::instance();
+
+  std::vector<SceneVariant> variants;
+  for (const auto& s : spec.scenes)
+    for (auto& v : scene_variants(s, spec.scene_grid, cache.root() / "derived-scenes"))
+      variants.push_back(std::move(v));
+  std::size_t planned = 0;
+  for (std::size_t i = 0; i < variants.size(); ++i)
+    for (const auto& b : spec.backends)
+      planned += spec.kind == ExperimentKind::kSweep ? sweep_points(spec, b).size() : 1;
+
+  const std::string tag = spec.variant.empty() ? spec.name : spec.name + " " + spec.variant;
+  std::size_t done = 0, computed = 0, hits = 0;
+  double computed_seconds = 0, saved_seconds = 0;
+  const auto report = [&](const std::string& what) {
+    if (!o.on_progress) return;
+    const double eta = computed ? computed_seconds / static_cast<double>(computed) *
+                                      static_cast<double>(planned - std::min(done, planned))
+                                : NAN;
+    o.on_progress(fmt::format("[{} {}/{}, ETA {}] {}", tag, std::min(done + 1, planned), planned,
+                              computed ? duration(eta) : std::string("?"), what));
+  };
+  if (summary.resumed && o.on_progress)
+    o.on_progress(
+        fmt::format("resuming the interrupted run in {} (finished points load from "
+                    "the stage cache)",
+                    folder.string()));
+
+  json points = json::array(), searches = json::array(), scenes = json::array(),
+       image_sets = json::array();
+  const auto account = [&](const PointOutcome& out) {
+    ++done;
+    if (out.cache_hit) {
+      ++hits;
+      saved_seconds += number_or_nan(out.record["measure_seconds"]);
+    } else {
+      ++computed;
+      computed_seconds += out.seconds;
+    }
+    if (o.stop_after_points > 0 && static_cast<int>(done) >= o.stop_after_points)
+      throw RunInterrupted(fmt::format("stopped after {} points", done));
+  };
+
+  for (const auto& variant : variants) {
+    report(fmt::format("{}: exact transfer, materials, exact images", variant.name));
+    SceneBench bench = prepare_bench(variant, spec, cache, bo);
+    json scene_info = bench.info;
+    if (spec.kind == ExperimentKind::kEqualStorage) {
+      std::uint64_t target = 0;
+      if (spec.target.megabytes) {
+        target = static_cast<std::uint64_t>(std::llround(*spec.target.megabytes * 1e6));
+      } else {
+        const auto& te = registry.get(spec.target.backend);
+        report(fmt::format("{}: target storage = {} bytes", variant.name, spec.target.backend));
+        const CompressionResult cr =
+            compress_cached(spec.target.backend, spec.target.params, bench.prepared.input(te),
+                            bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
+        target = cr.compressed->storage().total_bytes();
+      }
+      scene_info["target_bytes"] = target;
+      scene_info["target_backend"] =
+          spec.target.megabytes ? json(nullptr) : json(spec.target.backend);
+      std::vector<PointOutcome> outcomes;
+      outcomes.reserve(spec.backends.size());
+      for (const auto& backend : spec.backends) {
+        const auto& entry = registry.get(backend);
+        auto params = spec.params.contains(backend) ? spec.params.at(backend)
+                                                    : std::map<std::string, std::string>{};
+        json search = {{"scene", variant.name}, {"backend", backend}, {"target_bytes", target}};
+        if (entry.size_knob && !params.contains(entry.size_knob->key)) {
+          const bool integer = knob_is_int(entry);
+          const auto storage_at = [&](double v) {
+            auto p = params;
+            p[entry.size_knob->key] = format_knob(v, integer);
+            report(fmt::format("{} {}: storage search, {} = {}", variant.name, backend,
+                               entry.size_knob->key, p[entry.size_knob->key]));
+            const CompressionResult cr =
+                compress_cached(backend, p, bench.prepared.input(entry),
+                                bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
+            return cr.compressed->storage().total_bytes();
+          };
+          const StorageSearch s =
+              search_equal_storage(*entry.size_knob, integer, target, spec.target.tolerance,
+                                   spec.target.max_probes, storage_at);
+          params[entry.size_knob->key] = format_knob(s.value, integer);
+          json probes = json::array();
+          for (const auto& p : s.probes) probes.push_back({{"value", p.value}, {"bytes", p.bytes}});
+          search.update({{"knob", entry.size_knob->key},
+                         {"value", params[entry.size_knob->key]},
+                         {"bytes", s.bytes},
+                         {"ratio", s.ratio},
+                         {"reached", s.reached},
+                         {"note", s.note},
+                         {"probes", probes}});
+        } else {
+          search.update({{"knob", entry.size_knob ? json(entry.size_knob->key) : json(nullptr)},
+                         {"reached", nullptr},
+                         {"note", entry.size_knob ? "the experiment fixes the size knob"
+                                                  : "no size knob: its storage is what it is"}});
+        }
+        report(fmt::format("{} {}: measuring", variant.name, backend));
+        PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
+        const double bytes = out.record["storage_bytes"].get<double>();
+        const double ratio = bytes / static_cast<double>(target);
+        out.record["role"] = "equal_storage";
+        out.record["target_bytes"] = target;
+        out.record["storage_ratio"] = ratio;
+        out.record["reached"] = std::abs(ratio - 1.0) <= spec.target.tolerance;
+        if (!search.contains("bytes")) search["bytes"] = out.record["storage_bytes"];
+        search["ratio"] = ratio;
+        search["reached"] = out.record["reached"];
+        searches.push_back(search);
+        account(out);
+        outcomes.push_back(std::move(out));
+      }
+      if (spec.images) {
+        std::vector<PointOutcome*> ptrs;
+        for (auto& out : outcomes) ptrs.push_back(&out);
+        image_sets.push_back(
+            {{"scene", variant.name}, {"images", write_scene_images(bench, ptrs, folder)}});
+      }
+      for (auto& out : outcomes) points.push_back(std::move(out.record));
+    } else {
+      for (const auto& backend : spec.backends)
+        for (const auto& params : sweep_points(spec, backend)) {
+          std::string desc;
+          for (const auto& [k, v] : params) desc += fmt::format(" {}={}", k, v);
+          report(fmt::format("{} {}:{}", variant.name, backend, desc));
+          PointOutcome out = measure_point(bench, spec, backend, params, false, cache, bo);
+          out.record["role"] = "sweep";
+          account(out);
+          points.push_back(std::move(out.record));
+        }
+    }
+    scenes.push_back(std::move(scene_info));
+  }
+  mark_pareto(points);
+
+  json spec_json = {{"file", spec.file.string()},
+                    {"name", spec.name},
+                    {"title", spec.title},
+                    {"variant", spec.variant},
+                    {"kind", to_string(spec.kind)},
+                    {"scenes", spec.scenes},
+                    {"scene_grid", spec.scene_grid},
+                    {"backends", spec.backends},
+                    {"params", spec.params},
+                    {"grid", spec.grid},
+                    {"knob_points", spec.knob_points},
+                    {"views", spec.views},
+                    {"width", spec.width},
+                    {"height", spec.height},
+                    {"repeats", spec.repeats},
+                    {"timing", spec.timing},
+                    {"images", spec.images},
+                    {"fps", spec.fps},
+                    {"fps_frames", spec.fps_frames},
+                    {"reference", spec.reference}};
+  json envs = json::array();
+  for (const auto& e : spec.environments)
+    envs.push_back({{"name", e.name},
+                    {"file", e.file},
+                    {"sun_ratio", e.sun_ratio ? json(*e.sun_ratio) : json(nullptr)}});
+  spec_json["environments"] = envs;
+  if (spec.kind == ExperimentKind::kEqualStorage)
+    spec_json["target"] = {
+        {"backend", spec.target.backend},
+        {"params", spec.target.params},
+        {"megabytes", spec.target.megabytes ? json(*spec.target.megabytes) : json(nullptr)},
+        {"tolerance", spec.target.tolerance},
+        {"max_probes", spec.target.max_probes}};
+  json prov_json = to_json(prov);
+  prov_json["summary"] = prov.summary();
+  json result = {{"experiment", spec_json},
+                 {"provenance", prov_json},
+                 {"paper", spec.paper},
+                 {"paper_source", spec.paper_source},
+                 {"scenes", scenes},
+                 {"searches", searches},
+                 {"image_sets", image_sets},
+                 {"points", points},
+                 {"cache",
+                  {{"points_from_cache", hits},
+                   {"points_computed", computed},
+                   {"seconds_saved", saved_seconds},
+                   {"seconds_computing", computed_seconds},
+                   {"stage_cache", cache.root().string()},
+                   {"stage_hits", cache.stats().hits},
+                   {"stage_misses", cache.stats().misses}}}};
+  write_result_files(result, folder);
+  write_text_atomically(
+      folder / ".complete",
+      json({{"date_utc", prov.date_utc}, {"git", prov.git_hash}, {"points", points.size()}})
+              .dump(2) +
+          "\n");
+  fs::remove(folder / ".started");
+  summary.result = std::move(result);
+  return summary;
+}
+
+}  // namespace prt::experiments

@@ -1,0 +1,393 @@
+#include "point_measurement.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "prtlab/base/build_info.h"
+#include "prtlab/base/error.h"
+#include "prtlab/base/statistics.h"
+#include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/render/image_error.h"
+#include "prtlab/storage/archive.h"
+
+namespace prt::experiments {
+namespace {
+
+using json = nlohmann::json;
+
+// Bump when a point's record changes meaning or layout: cached points are then recomputed.
+constexpr std::uint32_t kPointVersion = 1;
+constexpr const char* kPointKind = "experiment-point";
+
+// The procedural sun of the "sun" environments: a sky of unit-ish radiance and a sun `ratio`
+// times brighter, small (0.5 degrees, the real sun's angular radius is 0.27) so that it falls
+// into one or two cubemap pixels: the case where low-frequency bases fail most.
+SunSky sun_environment(double ratio, double rotate_deg = 0) {
+  SunSky s;
+  s.sky = {0.6f, 0.75f, 1.0f};
+  s.ground = {0.2f, 0.18f, 0.15f};
+  const float r = static_cast<float>(ratio * 0.75);
+  s.sun = {r, r * 0.95f, r * 0.85f};
+  s.sun_radius_rad = 0.5 * 3.14159265358979323846 / 180.0;
+  const double a = rotate_deg * 3.14159265358979323846 / 180.0;
+  const Vec3d d{0.3, 0.8, 0.5};
+  // About +y, +x towards -z (rotate_latlong_y's convention).
+  s.sun_dir =
+      Vec3d{std::cos(a) * d.x + std::sin(a) * d.z, d.y, -std::sin(a) * d.x + std::cos(a) * d.z};
+  return s;
+}
+
+Cubemap environment_cubemap(const EnvironmentSpec& e, int resolution, double rotate_deg = 0) {
+  if (e.sun_ratio) return sun_environment(*e.sun_ratio, rotate_deg).to_cubemap(resolution);
+  const LatLongImage img = load_latlong_exr(e.file);
+  return resample_to_cubemap(rotate_deg == 0 ? img : rotate_latlong_y(img, rotate_deg), resolution);
+}
+
+// Exposure (stops) that maps the 99th-percentile luminance of the hit pixels to 0.9, so every
+// backend's PNG of a view uses the exact image's exposure and differences stay visible.
+double exposure_of(const RgbImage& img, std::span<const std::uint8_t> mask) {
+  std::vector<double> lum;
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+    if (!mask.empty() && !mask[i]) continue;
+    const Rgb& p = img.pixels[i];
+    const double y = 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
+    if (std::isfinite(y)) lum.push_back(y);
+  }
+  if (lum.empty()) return 0;
+  const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(lum.size() - 1));
+  std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
+  return lum[k] > 0 ? std::log2(0.9 / lum[k]) : 0.0;
+}
+
+json null_if_nan(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+std::string params_string(const std::map<std::string, std::string>& p) {
+  std::string s;
+  for (const auto& [k, v] : p) s += (s.empty() ? "" : ";") + k + "=" + v;
+  return s;
+}
+
+// Everything besides the backend and its parameters that a point's numbers depend on.
+json evaluation_settings(const ExperimentSpec& spec, const BenchOptions& o) {
+  json envs = json::array();
+  for (const auto& e : spec.environments)
+    envs.push_back({{"name", e.name},
+                    {"file", e.file},
+                    {"sun_ratio", e.sun_ratio ? json(*e.sun_ratio) : json(nullptr)}});
+  return {{"environments", envs},
+          {"views", spec.views},
+          {"width", spec.width},
+          {"height", spec.height},
+          {"repeats", spec.repeats},
+          {"timing", spec.timing},
+          {"images", spec.images},
+          {"fps", spec.fps},
+          {"fps_frames", spec.fps_frames},
+          {"reference", spec.reference},
+          {"device", o.device ? o.device->info().label() : std::string("none")}};
+}
+
+}  // namespace
+
+const std::vector<std::string>& point_record_columns() {
+  static const std::vector<std::string> columns = {"scene",
+                                                   "backend",
+                                                   "params",
+                                                   "role",
+                                                   "knob",
+                                                   "knob_value",
+                                                   "storage_bytes",
+                                                   "storage_mb",
+                                                   "target_bytes",
+                                                   "storage_ratio",
+                                                   "reached",
+                                                   "flops_per_relight",
+                                                   "computation_percent",
+                                                   "compress_seconds",
+                                                   "compress_cache_hit",
+                                                   "relight_ms_cpp",
+                                                   "relight_ms_opencl",
+                                                   "opencl_vs_cpp_rel_l2",
+                                                   "device",
+                                                   "lstar_rel_l2_mean",
+                                                   "lstar_rel_l2_max",
+                                                   "frobenius_rel",
+                                                   "frobenius_stderr",
+                                                   "max_vertex_rel",
+                                                   "image_rel_l2_mean",
+                                                   "image_rel_l2_max",
+                                                   "image_psnr_db_mean",
+                                                   "image_psnr_db_min",
+                                                   "frame_ms_view",
+                                                   "frame_ms_light",
+                                                   "fps_view",
+                                                   "fps_light",
+                                                   "declared_error_bound",
+                                                   "lossless",
+                                                   "vertices",
+                                                   "local_grid",
+                                                   "cubemap_resolution",
+                                                   "supersampling",
+                                                   "nnz",
+                                                   "pareto_time",
+                                                   "pareto_storage",
+                                                   "point_key"};
+  return columns;
+}
+
+const std::vector<std::string>& error_record_columns() {
+  static const std::vector<std::string> columns = {"scene",        "backend",      "params",
+                                                   "environment",  "view",         "lstar_rel_l2",
+                                                   "image_rel_l2", "image_psnr_db"};
+  return columns;
+}
+
+SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec, StageCache& cache,
+                         const BenchOptions& o) {
+  SceneBench b;
+  b.variant = variant;
+  const SceneDesc desc = parse_scene(variant.file);
+  std::vector<std::string> names = spec.backends;
+  names.push_back(spec.reference);
+  if (spec.kind == ExperimentKind::kEqualStorage && !spec.target.megabytes)
+    names.push_back(spec.target.backend);
+  std::sort(names.begin(), names.end());
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  PrepareOptions popt;
+  popt.cache = o.cache_mode;
+  popt.show_progress = o.show_progress;
+  b.prepared = prepare_scene_for(desc, names, cache, popt);
+  const TransferMatrix& t = b.prepared.transfer.result.transfer;
+  b.info = {{"scene", variant.name},
+            {"base", variant.base},
+            {"file", variant.file.string()},
+            {"overrides", variant.overrides},
+            {"vertices", t.vertex_count()},
+            {"local_grid", desc.local_grid},
+            {"cubemap_resolution", desc.cubemap_resolution},
+            {"supersampling", desc.supersampling},
+            {"M", t.local_count()},
+            {"N", t.cols()},
+            {"nnz", t.nnz()},
+            {"transfer_seconds", b.prepared.transfer.result.stats.seconds_total},
+            {"transfer_cache_hit", b.prepared.transfer.cache_hit},
+            {"transfer_key", b.prepared.transfer.key.hex()}};
+
+  for (const auto& e : spec.environments)
+    b.lights.push_back({e.name, environment_cubemap(e, desc.cubemap_resolution)});
+  if (spec.fps)
+    for (int i = 0; i < spec.fps_frames; ++i)
+      b.fps_lights.push_back(environment_cubemap(spec.environments.front(), desc.cubemap_resolution,
+                                                 360.0 * i / spec.fps_frames));
+  if (!spec.images && !spec.fps) return b;
+
+  b.scene = build_scene(desc);
+  if (b.scene.mesh.positions.size() != t.vertex_count())
+    throw Error(
+        fmt::format("scene '{}': the built mesh has {} vertices but its cached transfer "
+                    "has {} (stale stage cache? rerun with --recompute)",
+                    desc.name, b.scene.mesh.positions.size(), t.vertex_count()));
+  b.materials = load_scene_materials(desc, BtfParams{}, cache, "full", {}, o.show_progress);
+  const std::vector<std::string> views =
+      spec.views.empty() ? std::vector<std::string>{""} : spec.views;
+  CameraOverrides size;
+  size.width = spec.width;
+  size.height = spec.height;
+  for (const auto& v : views) {
+    b.view_names.push_back(scene_view(desc, v).name);
+    b.cameras.push_back(scene_camera(b.scene, v, size));
+  }
+  if (!spec.images) return b;
+
+  const auto& entry = CompressorRegistry::instance().get(spec.reference);
+  CompressionResult ref =
+      compress_cached(spec.reference, {}, b.prepared.input(entry), b.prepared.transfer.key, cache,
+                      o.cache_mode, o.show_progress);
+  FrameRenderer r(b.scene.mesh, b.materials,
+                  std::shared_ptr<const CompressedTransfer>(std::move(ref.compressed)), o.device);
+  for (const auto& cam : b.cameras) {
+    r.set_camera(cam);
+    b.masks.push_back(hit_mask(r.gbuffer()));
+    for (const auto& light : b.lights) {
+      r.set_environment(light.radiance);
+      (void)r.render();
+      b.exact_images.push_back(r.image());
+    }
+    b.exposure.push_back(
+        exposure_of(b.exact_images[b.exact_images.size() - b.lights.size()], b.masks.back()));
+  }
+  return b;
+}
+
+PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
+                           const std::string& backend,
+                           const std::map<std::string, std::string>& params, bool keep_images,
+                           StageCache& cache, const BenchOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto& registry = CompressorRegistry::instance();
+  const CompressorEntry& entry = registry.get(backend);
+  const auto canonical = ParamSet(backend, entry.params, params).canonical();
+  const bool images = spec.images && keep_images;
+  Hasher h;
+  h.add(kPointKind).add(kPointVersion).add(b.prepared.transfer.key).add(backend).add(entry.version);
+  for (const auto& [k, v] : canonical) h.add(k).add(v);
+  h.add(evaluation_settings(spec, o).dump()).add(build_info().git_hash).add(images);
+  const Hash128 key = h.digest();
+  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
+
+  PointOutcome out;
+  bool computed = false;
+  const auto compute = [&]() {
+    computed = true;
+    const auto tm = std::chrono::steady_clock::now();
+    const TransferMatrix& t = b.prepared.transfer.result.transfer;
+    CompressionResult cr =
+        compress_cached(backend, params, b.prepared.input(entry), b.prepared.transfer.key, cache,
+                        o.cache_mode, o.show_progress);
+    const StorageReport storage = cr.compressed->storage();
+    const double flops = cr.compressed->flops_per_relight();
+    json r;
+    for (const auto& c : point_record_columns()) r[c] = nullptr;
+    r["scene"] = b.variant.name;
+    r["backend"] = backend;
+    r["params"] = params_string(canonical);
+    if (entry.size_knob) {
+      r["knob"] = entry.size_knob->key;
+      r["knob_value"] = canonical.at(entry.size_knob->key);
+    }
+    r["storage_bytes"] = storage.total_bytes();
+    r["storage_mb"] = static_cast<double>(storage.total_bytes()) / 1e6;
+    r["flops_per_relight"] = flops;
+    r["computation_percent"] = t.nnz() ? 100.0 * flops / (2.0 * static_cast<double>(t.nnz())) : 0.0;
+    if (spec.timing) r["compress_seconds"] = cr.compress_seconds;
+    r["compress_cache_hit"] = cr.cache_hit;
+    r["declared_error_bound"] = cr.compressed->declared_error_bound();
+    r["lossless"] = entry.lossless;
+    r["vertices"] = t.vertex_count();
+    r["local_grid"] = b.info.at("local_grid");
+    r["cubemap_resolution"] = b.info.at("cubemap_resolution");
+    r["supersampling"] = b.info.at("supersampling");
+    r["nnz"] = t.nnz();
+    r["point_key"] = key.hex();
+    json components = json::array();
+    for (const auto& c : storage.components)
+      components.push_back({{"name", c.name}, {"bytes", c.bytes}});
+    r["storage_components"] = components;
+    r["canonical_params"] = canonical;
+
+    EvaluationOptions eo;
+    eo.repeats = spec.timing ? spec.repeats : 1;
+    const BackendEvaluation ev = evaluate_backend(*cr.compressed, t, b.lights, o.device, eo);
+    r["device"] = ev.device;
+    if (spec.timing) {
+      r["relight_ms_cpp"] = ev.ms_cpp;
+      r["relight_ms_opencl"] = ev.ms_opencl ? json(*ev.ms_opencl) : json(nullptr);
+    }
+    r["opencl_vs_cpp_rel_l2"] = ev.opencl_vs_cpp ? json(*ev.opencl_vs_cpp) : json(nullptr);
+    r["lstar_rel_l2_mean"] = ev.mean_rel_l2;
+    r["lstar_rel_l2_max"] = ev.max_rel_l2;
+    r["frobenius_rel"] = ev.frobenius.relative;
+    r["frobenius_stderr"] = ev.frobenius.standard_error;
+    r["max_vertex_rel"] = ev.max_vertex_rel;
+
+    json errors = json::array();
+    ArchiveWriter w(kPointKind, kPointVersion);
+    if (spec.images || spec.fps) {
+      FrameRenderer renderer(b.scene.mesh, b.materials,
+                             std::shared_ptr<const CompressedTransfer>(std::move(cr.compressed)),
+                             o.device);
+      if (spec.images) {
+        std::vector<double> rel, psnr;
+        for (std::size_t v = 0; v < b.cameras.size(); ++v) {
+          renderer.set_camera(b.cameras[v]);
+          for (std::size_t l = 0; l < b.lights.size(); ++l) {
+            renderer.set_environment(b.lights[l].radiance);
+            (void)renderer.render();
+            const RgbImage img = renderer.image();
+            const ImageError e =
+                image_error(img, b.exact_images[v * b.lights.size() + l], b.masks[v]);
+            rel.push_back(e.relative_l2);
+            psnr.push_back(e.psnr_db);
+            errors.push_back({{"environment", b.lights[l].name},
+                              {"view", b.view_names[v]},
+                              {"lstar_rel_l2", ev.errors[l].rel_l2},
+                              {"image_rel_l2", null_if_nan(e.relative_l2)},
+                              {"image_psnr_db", null_if_nan(e.psnr_db)}});
+            if (images) {
+              std::vector<float> px(pixels * 3);
+              for (std::size_t i = 0; i < pixels; ++i)
+                for (int c = 0; c < 3; ++c) px[i * 3 + c] = img.pixels[i][c];
+              w.add_section(fmt::format("image{}", v * b.lights.size() + l), std::move(px));
+            }
+          }
+        }
+        double sum = 0, mx = 0, psum = 0, pmin = INFINITY;
+        for (double x : rel) sum += x, mx = std::max(mx, x);
+        for (double x : psnr) psum += x, pmin = std::min(pmin, x);
+        r["image_rel_l2_mean"] = null_if_nan(sum / static_cast<double>(rel.size()));
+        r["image_rel_l2_max"] = null_if_nan(mx);
+        r["image_psnr_db_mean"] = null_if_nan(psum / static_cast<double>(psnr.size()));
+        r["image_psnr_db_min"] = null_if_nan(pmin);
+      }
+      if (spec.fps && spec.timing) {
+        // View changes: the camera orbits the target; light changes: the first environment
+        // rotates (cubemaps prepared beforehand), at the first view.
+        std::vector<double> view_ms, light_ms;
+        renderer.set_environment(b.fps_lights.front());
+        for (int i = 0; i < spec.fps_frames; ++i) {
+          renderer.set_camera(orbit_camera(b.cameras.front(), 360.0 * i / spec.fps_frames));
+          view_ms.push_back(renderer.render().times.total_ms());
+        }
+        renderer.set_camera(b.cameras.front());
+        (void)renderer.render();
+        for (int i = 0; i < spec.fps_frames; ++i) {
+          renderer.set_environment(b.fps_lights[static_cast<std::size_t>(i)]);
+          light_ms.push_back(renderer.render().times.total_ms());
+        }
+        r["frame_ms_view"] = median(view_ms);
+        r["frame_ms_light"] = median(light_ms);
+        r["fps_view"] = 1000.0 / median(view_ms);
+        r["fps_light"] = 1000.0 / median(light_ms);
+      }
+    } else {
+      for (std::size_t l = 0; l < b.lights.size(); ++l)
+        errors.push_back({{"environment", b.lights[l].name},
+                          {"view", nullptr},
+                          {"lstar_rel_l2", ev.errors[l].rel_l2},
+                          {"image_rel_l2", nullptr},
+                          {"image_psnr_db", nullptr}});
+    }
+    r["errors"] = errors;
+    r["measure_seconds"] = seconds_since(tm);
+    w.add_meta("record", r);
+    w.add_meta("image_count", images ? b.cameras.size() * b.lights.size() : 0);
+    return w;
+  };
+  const auto consume = [&](const ArchiveReader& reader) {
+    out.record = reader.meta().at("record");
+    const auto count = reader.meta().at("image_count").get<std::size_t>();
+    out.images.clear();
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto px = reader.section<float>(fmt::format("image{}", i), pixels * 3);
+      RgbImage img(spec.width, spec.height);
+      for (std::size_t p = 0; p < pixels; ++p)
+        img.pixels[p] = Rgb{px[p * 3], px[p * 3 + 1], px[p * 3 + 2]};
+      out.images.push_back(std::move(img));
+    }
+  };
+  cache.fetch("experiment-point", key, compute, consume, o.cache_mode);
+  out.cache_hit = !computed;
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
+}  // namespace prt::experiments

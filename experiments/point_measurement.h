@@ -1,0 +1,82 @@
+#pragma once
+// One point of an experiment: a backend at one set of parameters on one scene variant,
+// measured as every report prints it (docs/experiments.md "Points"), and cached.
+//
+// A point is a stage of its own ("experiment-point" in the stage cache) keyed by the scene's
+// transfer key, the backend, its canonical parameters and version, the evaluation settings
+// (environments, views, image size, repeats, what is measured, the device) and the build, so
+// an interrupted run resumes from the points it finished, a later run recomputes only points
+// whose inputs changed, and a distributed runner can split points across machines without
+// changing any number. Its record is a JSON object of fixed keys (point_record_columns());
+// its images, when kept, are float sections of the same archive.
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiment_spec.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/backend_input.h"
+#include "prtlab/geometry/camera.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/render/btf_shading.h"
+#include "prtlab/storage/content_hash.h"
+#include "prtlab/storage/stage_cache.h"
+#include "scene_variants.h"
+
+namespace prt {
+class ClContext;
+}
+
+namespace prt::experiments {
+
+/// Everything the points of one scene variant share, built once: T and every backend's
+/// inputs, the mesh and materials, cameras, the evaluation lights and the exact images.
+struct SceneBench {
+  SceneVariant variant;
+  PreparedScene prepared;
+  Scene scene;
+  ShadingMaterials materials;
+  std::vector<std::string> view_names;
+  std::vector<Camera> cameras;
+  std::vector<EvaluationLight> lights;  ///< one per environment of the spec, in its order
+  std::vector<Cubemap> fps_lights;      ///< the first environment rotated, for light-change frames
+  /// The reference backend's images and hit masks, [view * lights + light].
+  std::vector<RgbImage> exact_images;
+  std::vector<std::vector<std::uint8_t>> masks;  ///< per view
+  std::vector<double> exposure;                  ///< per view: PNG exposure of the exact image
+  nlohmann::json info;                           ///< vertices, M, N, nnz, T's computation time
+};
+
+struct BenchOptions {
+  ClContext* device = nullptr;
+  CacheMode cache_mode = CacheMode::kUse;
+  bool show_progress = false;
+};
+
+/// Build the bench of a scene variant for `spec` (stages from `cache`).
+SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec, StageCache& cache,
+                         const BenchOptions& options);
+
+struct PointOutcome {
+  nlohmann::json record;         ///< point_record_columns() keys, plus "errors" (per env x view)
+  std::vector<RgbImage> images;  ///< [view * lights + light] when kept, else empty
+  bool cache_hit = false;
+  double seconds = 0;  ///< this call
+};
+
+/// Measure `backend` at `params` (validated; canonicalised) on the bench, or load the point
+/// from the cache. `keep_images` stores the rendered images with the point.
+PointOutcome measure_point(const SceneBench& bench, const ExperimentSpec& spec,
+                           const std::string& backend,
+                           const std::map<std::string, std::string>& params, bool keep_images,
+                           StageCache& cache, const BenchOptions& options);
+
+/// The columns of points.csv, in order: every record has exactly these keys (null where a
+/// value does not apply).
+const std::vector<std::string>& point_record_columns();
+/// The columns of errors.csv (one row per point, environment and view).
+const std::vector<std::string>& error_record_columns();
+
+}  // namespace prt::experiments
