@@ -4,6 +4,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <set>
 
@@ -88,12 +89,13 @@ std::map<std::string, std::string> param_table(const fs::path& file, const toml:
 
 EnvironmentSpec parse_environment(const fs::path& file, const std::string& name) {
   EnvironmentSpec e;
-  if (name.starts_with("sun")) {
+  // "sun", "sun:RATIO" or "sun-RATIO" (not "sunset", a Blender world).
+  const bool sun = name == "sun" || name.starts_with("sun:") ||
+                   (name.starts_with("sun-") && name.size() > 4 &&
+                    std::isdigit(static_cast<unsigned char>(name[4])));
+  if (sun) {
     double ratio = 3e4;
     if (name.size() > 3) {
-      if (name[3] != ':' && name[3] != '-')
-        throw InputError(file,
-                         fmt::format("environment '{}': write sun, sun:RATIO or sun-RATIO", name));
       try {
         std::size_t used = 0;
         ratio = std::stod(name.substr(4), &used);

@@ -1,0 +1,275 @@
+// Experiment files run end to end on the tiny scene (experiments/experiment_run.h): the
+// equal-storage search on a backend with a storage curve known in closed form, resuming an
+// interrupted run, refusing to overwrite, the stage cache on a repeated run, and the parser's
+// refusals.
+#include "experiment_run.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "experiment_report.h"
+#include "experiment_spec.h"
+#include "point_measurement.h"
+#include "prtlab/base/error.h"
+#include "prtlab/compress/backend_input.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/storage/data_paths.h"
+#include "support/temp_dir.h"
+
+namespace prt::experiments {
+namespace {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+std::string read(const fs::path& f) {
+  std::ifstream in(f);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A CSV without its provenance comment lines (dates and commands differ between runs).
+std::string csv_body(const fs::path& f) {
+  std::string out, line;
+  std::ifstream in(f);
+  while (std::getline(in, line))
+    if (!line.starts_with("#")) out += line + "\n";
+  return out;
+}
+
+json points_without_times(const fs::path& folder) {
+  json points = json::parse(read(folder / "result.json")).at("points");
+  for (auto& p : points) p.erase("measure_seconds");
+  return points;
+}
+
+class ExperimentRun : public ::testing::Test {
+ protected:
+  fs::path write_spec(const std::string& name, const std::string& body) {
+    const fs::path f = dir_ / (name + ".toml");
+    std::ofstream(f) << body;
+    return f;
+  }
+  ExperimentSpec parse(const fs::path& f, const std::string& variant = "") {
+    return parse_experiment(f, variant, CompressorRegistry::instance().names());
+  }
+  RunOptions options(const std::string& tag) {
+    RunOptions o;
+    o.out_root = dir_ / ("results-" + tag);
+    o.cache_root = dir_ / ("cache-" + tag);
+    o.show_progress_bars = false;
+    return o;
+  }
+  prt::testing::TempDir tmp_{"experiment_run"};
+  fs::path dir_ = tmp_.path();
+};
+
+// The deterministic sweep the resume tests run: no timings, so two runs give the same files.
+const char* kSweep = R"(
+name = "tiny-sweep"
+kind = "sweep"
+scenes = ["tiny-sphere-plane"]
+backends = ["bicluster", "coo", "uncompressed"]
+environments = ["courtyard", "sun:1e4"]
+image = { width = 48, height = 36 }
+timing = false
+knob_points = 3
+[grid.bicluster]
+error = [0, 0.05]
+)";
+
+TEST_F(ExperimentRun, EqualStorageLandsWithinFivePercentOnAKnownStorageCurve) {
+  // coo keeps ceil(keep * n_r) entries of each row r at 12 bytes each: the target is that curve
+  // at keep = 0.37, computed here from T alone.
+  StageCache cache(dir_ / "cache-curve");
+  const SceneDesc desc = parse_scene(resolve_scene("tiny-sphere-plane"));
+  const std::vector<std::string> coo = {"coo"};
+  const PreparedScene scene = prepare_scene_for(desc, coo, cache, {.show_progress = false});
+  const TransferMatrix& t = scene.transfer.result.transfer;
+  std::uint64_t entries = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const auto n = t.row_offsets()[r + 1] - t.row_offsets()[r];
+    entries += static_cast<std::uint64_t>(std::ceil(0.37 * static_cast<double>(n)));
+  }
+  const std::uint64_t target = 12 * entries;
+  const auto f = write_spec("curve", fmt::format(R"(
+name = "curve"
+kind = "equal_storage"
+scenes = ["tiny-sphere-plane"]
+backends = ["coo"]
+images = false
+timing = false
+[target]
+megabytes = {}
+tolerance = 0.05
+)",
+                                                 static_cast<double>(target) / 1e6));
+  RunOptions o = options("curve");
+  o.cache_root = dir_ / "cache-curve";
+  const RunSummary s = run_experiment(parse(f), o);
+  ASSERT_EQ(s.result.at("points").size(), 1u);
+  const json& p = s.result.at("points")[0];
+  EXPECT_TRUE(p.at("reached").get<bool>());
+  EXPECT_LE(std::abs(p.at("storage_ratio").get<double>() - 1.0), 0.05);
+  // The reported storage is the curve's at the value found.
+  const double keep = std::stod(p.at("knob_value").get<std::string>());
+  std::uint64_t at_keep = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const auto n = t.row_offsets()[r + 1] - t.row_offsets()[r];
+    at_keep += static_cast<std::uint64_t>(std::ceil(keep * static_cast<double>(n)));
+  }
+  EXPECT_EQ(p.at("storage_bytes").get<std::uint64_t>(), 12 * at_keep);
+  const json& search = s.result.at("searches")[0];
+  EXPECT_TRUE(search.at("reached").get<bool>());
+  EXPECT_LE(search.at("probes").size(), 14u);
+  EXPECT_TRUE(fs::exists(s.folder / ".complete"));
+}
+
+TEST_F(ExperimentRun, ResumingAnInterruptedRunGivesTheSameFiles) {
+  const auto f = write_spec("sweep", kSweep);
+  const ExperimentSpec spec = parse(f);
+
+  const RunSummary whole = run_experiment(spec, options("whole"));
+  const std::size_t points = whole.result.at("points").size();
+  ASSERT_EQ(points, 2u + 3u + 1u);  // bicluster grid, coo knob at 3 values, uncompressed
+
+  RunOptions o = options("resumed");
+  o.stop_after_points = 2;
+  EXPECT_THROW(run_experiment(spec, o), RunInterrupted);
+  const fs::path folder = result_folder(spec, o.out_root);
+  EXPECT_FALSE(fs::exists(folder / ".complete"));
+  EXPECT_TRUE(fs::exists(folder / ".started"));
+  o.stop_after_points = 0;
+  const RunSummary resumed = run_experiment(spec, o);
+  EXPECT_TRUE(resumed.resumed);
+  EXPECT_EQ(resumed.result.at("cache").at("points_from_cache").get<int>(), 2);
+  EXPECT_EQ(resumed.result.at("cache").at("points_computed").get<int>(),
+            static_cast<int>(points) - 2);
+
+  EXPECT_EQ(csv_body(whole.folder / "points.csv"), csv_body(resumed.folder / "points.csv"));
+  EXPECT_EQ(csv_body(whole.folder / "errors.csv"), csv_body(resumed.folder / "errors.csv"));
+  EXPECT_EQ(points_without_times(whole.folder), points_without_times(resumed.folder));
+  EXPECT_TRUE(fs::exists(resumed.folder / ".complete"));
+  EXPECT_FALSE(fs::exists(resumed.folder / ".started"));
+}
+
+TEST_F(ExperimentRun, ARepeatedRunLoadsEveryPointAndRefusesToOverwrite) {
+  const auto f = write_spec("sweep", kSweep);
+  const ExperimentSpec spec = parse(f);
+  RunOptions o = options("repeat");
+  const RunSummary first = run_experiment(spec, o);
+  EXPECT_EQ(first.result.at("cache").at("points_from_cache").get<int>(), 0);
+  try {
+    run_experiment(spec, o);
+    ADD_FAILURE() << "overwrote a complete run";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+  }
+  o.force = true;
+  const RunSummary second = run_experiment(spec, o);
+  const json& c = second.result.at("cache");
+  EXPECT_EQ(c.at("points_from_cache").get<int>(),
+            static_cast<int>(first.result.at("points").size()));
+  EXPECT_EQ(c.at("points_computed").get<int>(), 0);
+  EXPECT_GT(c.at("seconds_saved").get<double>(), 0.0);
+  EXPECT_EQ(csv_body(first.folder / "points.csv"), csv_body(second.folder / "points.csv"));
+
+  // The report is drawn from result.json alone.
+  write_experiment_report(second.folder, false, true);
+  const std::string md = read(second.folder / "README.md");
+  EXPECT_NE(md.find("## tiny-sphere-plane"), std::string::npos);
+  EXPECT_NE(md.find("`coo`"), std::string::npos);
+}
+
+TEST_F(ExperimentRun, EveryPointHasTheFixedColumns) {
+  const auto f = write_spec("sweep", kSweep);
+  const RunSummary s = run_experiment(parse(f), options("columns"));
+  std::ifstream in(s.folder / "points.csv");
+  std::string line, header;
+  while (std::getline(in, line))
+    if (!line.starts_with("#")) {
+      header = line;
+      break;
+    }
+  std::string expected = "experiment,variant";
+  for (const auto& c : point_record_columns()) expected.append(",").append(c);
+  EXPECT_EQ(header, expected);
+  for (const auto& p : s.result.at("points")) {
+    for (const auto& c : point_record_columns()) EXPECT_TRUE(p.contains(c)) << c;
+    EXPECT_EQ(p.at("errors").size(), 2u);  // two environments, one view
+    // A lossless backend's L* error is float rounding only.
+    if (p.at("backend") == "uncompressed") {
+      EXPECT_LT(p.at("lstar_rel_l2_mean").get<double>(), 1e-6);
+      EXPECT_EQ(p.at("image_rel_l2_mean").get<double>(), 0.0);
+    }
+  }
+}
+
+TEST_F(ExperimentRun, TheParserNamesTheFileAndTheProblem) {
+  const auto expect_error = [&](const std::string& body, const std::string& needle,
+                                const std::string& variant = "") {
+    const auto f = write_spec("bad", body);
+    try {
+      (void)parse(f, variant);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("bad.toml"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+    }
+  };
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nrepeat = 3\n", "unknown key 'repeat'");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nbackends = [\"nope\"]\n",
+               "backend 'nope' is not registered");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\n[params.bicluster]\nerorr = 1\n", "erorr");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nenvironments = [\"moon\"]\n", "moon");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\n", "no variant 'quick'", "quick");
+  expect_error("name = \"X Y\"\nscenes = [\"bunny\"]\n", "lower-case");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nkind = \"fast\"\n", "kind 'fast'");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nimage = { width = 2 }\n", "image.width");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nscene_grid = { colour = [1] }\n", "colour");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"\n", "line");
+}
+
+TEST_F(ExperimentRun, VariantsReplaceTheKeysTheyName) {
+  const auto f = write_spec("variants", R"(
+name = "v"
+scenes = ["bunny"]
+repeats = 10
+environments = ["blender", "sun"]
+[variant.quick]
+scenes = ["tiny-sphere-plane"]
+repeats = 2
+)");
+  EXPECT_EQ(experiment_variants(f), (std::vector<std::string>{"quick"}));
+  const auto top = parse(f);
+  EXPECT_EQ(top.scenes, (std::vector<std::string>{"bunny"}));
+  EXPECT_EQ(top.environments.size(), 9u);  // the eight Blender worlds and the sun
+  EXPECT_EQ(top.environments.back().name, "sun-3e+04");
+  const auto quick = parse(f, "quick");
+  EXPECT_EQ(quick.scenes, (std::vector<std::string>{"tiny-sphere-plane"}));
+  EXPECT_EQ(quick.repeats, 2);
+  EXPECT_EQ(quick.environments.size(), 9u);
+  EXPECT_EQ(result_folder(quick, "r"), fs::path("r") / "v-quick");
+  // "*" is every registered backend.
+  EXPECT_EQ(top.backends, CompressorRegistry::instance().names());
+}
+
+TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {
+  const auto files = experiment_files();
+  std::vector<std::string> names;
+  for (const auto& f : files) {
+    names.push_back(f.stem().string());
+    for (const auto& v : experiment_variants(f)) EXPECT_NO_THROW((void)parse(f, v)) << f;
+    EXPECT_NO_THROW((void)parse(f)) << f;
+  }
+  for (const char* n : {"fig6", "fig8", "pareto"})
+    EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+}
+
+}  // namespace
+}  // namespace prt::experiments
