@@ -25,6 +25,10 @@ echo "== environment: courtyard"
 echo "== transfer: bunny (cached after the first run)"
 "$PRTLAB" precompute bunny
 "$PRTLAB" -q precompute bunny --json > "$OUT/bunny-transfer.json.tmp" && mv "$OUT/bunny-transfer.json.tmp" "$OUT/bunny-transfer.json"
+# The multi-backend comparison a new user should see first: every registered backend at the
+# lossless bicluster's storage on the bunny (fig6's quick variant): table, images, error maps.
+echo "== experiment fig6 --quick: every backend at equal storage on the bunny"
+"$PRTLAB" experiment run fig6 --quick --out "$OUT" --force
 echo "== backends on bunny"
 for backend in $("$PRTLAB" list --json | python3 -c 'import json,sys; print(" ".join(b["name"] for b in json.load(sys.stdin)["backends"]))'); do
   echo "-- $backend"
