@@ -347,39 +347,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   }
   mark_pareto(points);
 
-  json spec_json = {{"file", spec.file.string()},
-                    {"name", spec.name},
-                    {"title", spec.title},
-                    {"variant", spec.variant},
-                    {"kind", to_string(spec.kind)},
-                    {"scenes", spec.scenes},
-                    {"scene_grid", spec.scene_grid},
-                    {"backends", spec.backends},
-                    {"params", spec.params},
-                    {"grid", spec.grid},
-                    {"knob_points", spec.knob_points},
-                    {"views", spec.views},
-                    {"width", spec.width},
-                    {"height", spec.height},
-                    {"repeats", spec.repeats},
-                    {"timing", spec.timing},
-                    {"images", spec.images},
-                    {"fps", spec.fps},
-                    {"fps_frames", spec.fps_frames},
-                    {"reference", spec.reference}};
-  json envs = json::array();
-  for (const auto& e : spec.environments)
-    envs.push_back({{"name", e.name},
-                    {"file", e.file},
-                    {"sun_ratio", e.sun_ratio ? json(*e.sun_ratio) : json(nullptr)}});
-  spec_json["environments"] = envs;
-  if (spec.kind == ExperimentKind::kEqualStorage)
-    spec_json["target"] = {
-        {"backend", spec.target.backend},
-        {"params", spec.target.params},
-        {"megabytes", spec.target.megabytes ? json(*spec.target.megabytes) : json(nullptr)},
-        {"tolerance", spec.target.tolerance},
-        {"max_probes", spec.target.max_probes}};
+  const json spec_json = to_json(spec);
   json prov_json = to_json(prov);
   prov_json["summary"] = prov.summary();
   json result = {{"experiment", spec_json},

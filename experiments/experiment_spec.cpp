@@ -150,6 +150,42 @@ std::string_view to_string(ExperimentKind k) {
   return k == ExperimentKind::kEqualStorage ? "equal_storage" : "sweep";
 }
 
+nlohmann::json evaluation_json(const ExperimentSpec& s) {
+  nlohmann::json envs = nlohmann::json::array();
+  for (const auto& e : s.environments)
+    envs.push_back(
+        {{"name", e.name},
+         {"file", e.file},
+         {"sun_ratio", e.sun_ratio ? nlohmann::json(*e.sun_ratio) : nlohmann::json(nullptr)}});
+  return {{"environments", envs},    {"views", s.views},     {"width", s.width},
+          {"height", s.height},      {"repeats", s.repeats}, {"timing", s.timing},
+          {"images", s.images},      {"fps", s.fps},         {"fps_frames", s.fps_frames},
+          {"reference", s.reference}};
+}
+
+nlohmann::json to_json(const ExperimentSpec& s) {
+  nlohmann::json j = evaluation_json(s);
+  j.update({{"file", s.file.string()},
+            {"name", s.name},
+            {"title", s.title},
+            {"variant", s.variant},
+            {"kind", to_string(s.kind)},
+            {"scenes", s.scenes},
+            {"scene_grid", s.scene_grid},
+            {"backends", s.backends},
+            {"params", s.params},
+            {"grid", s.grid},
+            {"knob_points", s.knob_points}});
+  if (s.kind == ExperimentKind::kEqualStorage)
+    j["target"] = {{"backend", s.target.backend},
+                   {"params", s.target.params},
+                   {"megabytes", s.target.megabytes ? nlohmann::json(*s.target.megabytes)
+                                                    : nlohmann::json(nullptr)},
+                   {"tolerance", s.target.tolerance},
+                   {"max_probes", s.target.max_probes}};
+  return j;
+}
+
 std::vector<std::string> experiment_variants(const fs::path& file) {
   const toml::table root = load_table(file);
   std::vector<std::string> out;

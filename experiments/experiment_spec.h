@@ -9,6 +9,7 @@
 // names the file and, where toml++ knows it, the line.
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,12 @@ struct ExperimentSpec {
   std::map<std::string, std::string> paper;
   std::string paper_source;  ///< where those numbers come from
 };
+
+/// What a point's numbers depend on besides its backend and parameters: environments, views,
+/// image size, repeats, timing, images, fps, reference (part of every point's cache key).
+nlohmann::json evaluation_json(const ExperimentSpec& spec);
+/// The whole parsed spec (result.json's "experiment").
+nlohmann::json to_json(const ExperimentSpec& spec);
 
 /// The variants a file declares ("quick", "full"), in file order.
 std::vector<std::string> experiment_variants(const std::filesystem::path& file);

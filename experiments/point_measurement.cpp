@@ -78,22 +78,9 @@ std::string params_string(const std::map<std::string, std::string>& p) {
 
 // Everything besides the backend and its parameters that a point's numbers depend on.
 json evaluation_settings(const ExperimentSpec& spec, const BenchOptions& o) {
-  json envs = json::array();
-  for (const auto& e : spec.environments)
-    envs.push_back({{"name", e.name},
-                    {"file", e.file},
-                    {"sun_ratio", e.sun_ratio ? json(*e.sun_ratio) : json(nullptr)}});
-  return {{"environments", envs},
-          {"views", spec.views},
-          {"width", spec.width},
-          {"height", spec.height},
-          {"repeats", spec.repeats},
-          {"timing", spec.timing},
-          {"images", spec.images},
-          {"fps", spec.fps},
-          {"fps_frames", spec.fps_frames},
-          {"reference", spec.reference},
-          {"device", o.device ? o.device->info().label() : std::string("none")}};
+  json j = evaluation_json(spec);
+  j["device"] = o.device ? o.device->info().label() : std::string("none");
+  return j;
 }
 
 }  // namespace
