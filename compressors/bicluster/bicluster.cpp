@@ -10,8 +10,10 @@
 #include <span>
 
 #include "bicluster/bicluster_budget.h"
+#include "bicluster/bicluster_culling.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/sphere/lit_faces.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
@@ -378,7 +380,10 @@ SparseCounts reconstruct(const BiclusterArrays& a) {
 }
 
 BiclusterTransfer::BiclusterTransfer(BiclusterArrays arrays)
-    : a_(std::move(arrays)), incidences_(a_.incidences()) {}
+    : a_(std::move(arrays)),
+      incidences_(a_.incidences()),
+      faces_(bicluster_faces(a_)),
+      row_lanes_(row_lanes(a_)) {}
 
 StorageReport BiclusterTransfer::storage() const {
   const std::uint64_t col_bytes = narrow() ? 2 : 4;
@@ -421,73 +426,111 @@ LightCoeffs BiclusterTransfer::project_light(const Cubemap& radiance) const {
   return {"pixel", radiance.light_vector()};
 }
 
-void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
-  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
-  const std::size_t rows = a_.rows();
+void BiclusterTransfer::prepare_output(LocalRadiance& out) const {
   if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != rows) {
+      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
     out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   }
-  // RGB + pad as one SSE register: float4 loads and adds, as the OpenCL kernels do. Float
-  // accumulation: a row's rounding error is at most about (its terms) x 2^-24 x (the sum of
-  // their magnitudes); with ~20 terms per row that is ~1e-7 of the largest value (measured:
-  // ~1e-7 relative L2 against the double product; the conformance suite allows 1e-6).
+}
+
+// RGB + pad as one SSE register: float4 loads and adds, as the OpenCL kernels do. Float
+// accumulation: a row's rounding error is at most about (its terms) x 2^-24 x (the sum of
+// their magnitudes); with ~20 terms per row that is ~1e-7 of the largest value (measured:
+// ~1e-7 relative L2 against the double product; the conformance suite allows 1e-6).
+void BiclusterTransfer::phase1(const LightCoeffs& light, std::uint32_t lit, float* products) const {
+  F4* p = reinterpret_cast<F4*>(products);
   const std::size_t nb = a_.bicluster_count();
-  // Not value-initialised: every element is written below (P is ~1 MB on the bunny).
+  // Not value-initialised: every element is written below.
   const auto light4 = std::make_unique_for_overwrite<F4[]>(light.values.size());
   for (std::size_t k = 0; k < light.values.size(); ++k)
     light4[k] = F4{light.values[k].x, light.values[k].y, light.values[k].z, 0.f};
   // Phase 1 (Algorithm 2, lines 1-3): one RGB scalar per bicluster (0 for the zero slots).
-  const auto p = std::make_unique_for_overwrite<F4[]>(a_.product_count());
   p[a_.product_count() - 1] = F4{0.f, 0.f, 0.f, 0.f};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 8192), [&](const auto& range) {
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
       F4 acc{0.f, 0.f, 0.f, 0.f};
-      for (std::uint32_t q = a_.bic_col_offsets[i]; q < a_.bic_col_offsets[i + 1]; ++q)
-        acc += static_cast<float>(a_.bic_constants[q]) * light4[a_.bic_columns[q]];
+      if ((faces_[i] & lit) != 0) {
+        for (std::uint32_t q = a_.bic_col_offsets[i]; q < a_.bic_col_offsets[i + 1]; ++q)
+          acc += static_cast<float>(a_.bic_constants[q]) * light4[a_.bic_columns[q]];
+      }
       p[i] = acc;
     }
   });
+}
+
+void BiclusterTransfer::phase2(const float* products, const std::uint32_t* slices,
+                               const std::uint8_t* lanes, std::size_t count,
+                               LocalRadiance& out) const {
   // Phase 2 (lines 4-11): per slice, four rows gathered in lockstep. Each row is summed by one
   // task in a fixed order, so the result does not depend on the thread count.
+  const std::size_t rows = a_.rows();
   const float scale = static_cast<float>(a_.scale());
-  const F4* pp = p.get();
+  const F4* pp = reinterpret_cast<const F4*>(products);
   const std::uint16_t* codes = a_.slice_codes.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a_.slice_count(), 512),
-                    [&](const auto& range) {
-                      for (std::size_t s = range.begin(); s < range.end(); ++s) {
-                        F4 a0{0.f, 0.f, 0.f, 0.f}, a1 = a0, a2 = a0, a3 = a0;
-                        std::uint32_t i0 = a_.slice_base[s], i1 = i0, i2 = i0, i3 = i0;
-                        const std::uint16_t* c = codes + a_.slice_offsets[s];
-                        const std::uint16_t* end = codes + a_.slice_offsets[s + 1];
-                        for (; c < end; c += kSliceRows) {
-                          i0 += c[0];
-                          i1 += c[1];
-                          i2 += c[2];
-                          i3 += c[3];
-                          a0 += pp[i0];
-                          a1 += pp[i1];
-                          a2 += pp[i2];
-                          a3 += pp[i3];
-                        }
-                        const F4 acc[kSliceRows] = {a0, a1, a2, a3};
-                        for (int lane = 0; lane < kSliceRows; ++lane) {
-                          const std::uint32_t row = a_.slice_rows[s * kSliceRows + lane];
-                          if (row >= rows) continue;
-                          const F4 v = acc[lane] * scale;
-                          out.values[row] = Rgb(v[0], v[1], v[2]);
-                        }
-                      }
-                    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 512), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      const std::size_t s = slices ? slices[i] : i;
+      const unsigned store = lanes ? lanes[i] : 0xfu;
+      F4 a0{0.f, 0.f, 0.f, 0.f}, a1 = a0, a2 = a0, a3 = a0;
+      std::uint32_t i0 = a_.slice_base[s], i1 = i0, i2 = i0, i3 = i0;
+      const std::uint16_t* c = codes + a_.slice_offsets[s];
+      const std::uint16_t* end = codes + a_.slice_offsets[s + 1];
+      for (; c < end; c += kSliceRows) {
+        i0 += c[0];
+        i1 += c[1];
+        i2 += c[2];
+        i3 += c[3];
+        a0 += pp[i0];
+        a1 += pp[i1];
+        a2 += pp[i2];
+        a3 += pp[i3];
+      }
+      const F4 acc[kSliceRows] = {a0, a1, a2, a3};
+      for (int lane = 0; lane < kSliceRows; ++lane) {
+        const std::uint32_t row = a_.slice_rows[s * kSliceRows + lane];
+        if (row >= rows || (store >> lane & 1u) == 0) continue;
+        const F4 v = acc[lane] * scale;
+        out.values[row] = Rgb(v[0], v[1], v[2]);
+      }
+    }
+  });
+}
+
+void BiclusterTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
+  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
+  relight_faces(light, lit_faces(light.values), out);
+}
+
+void BiclusterTransfer::relight_faces(const LightCoeffs& light, std::uint32_t lit,
+                                      LocalRadiance& out) const {
+  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
+  prepare_output(out);
+  // P is ~1.5 MB on the bunny: not value-initialised, phase 1 writes every product read.
+  const auto p = std::make_unique_for_overwrite<F4[]>(a_.product_count());
+  phase1(light, lit, reinterpret_cast<float*>(p.get()));
+  phase2(reinterpret_cast<const float*>(p.get()), nullptr, nullptr, a_.slice_count(), out);
+}
+
+void BiclusterTransfer::relight_vertices(const LightCoeffs& light,
+                                         std::span<const std::uint32_t> vertices,
+                                         LocalRadiance& out) const {
+  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
+  check_vertex_subset(vertices, a_.vertices, kName);
+  prepare_output(out);
+  const SliceSubset subset = slices_of(a_.slice_count(), a_.local_count, row_lanes_, vertices);
+  const auto p = std::make_unique_for_overwrite<F4[]>(a_.product_count());
+  phase1(light, lit_faces(light.values), reinterpret_cast<float*>(p.get()));
+  phase2(reinterpret_cast<const float*>(p.get()), subset.slices.data(), subset.lanes.data(),
+         subset.slices.size(), out);
 }
 
 std::unique_ptr<DeviceRelighter> BiclusterTransfer::upload(ClContext& context,
                                                            const ParamSet& device_options) const {
-  return upload_arrays(
-      context, a_,
-      device_options.get_enum<DeviceIds>(
-          "opencl_ids",
-          {{"auto", DeviceIds::kAuto}, {"u16", DeviceIds::kU16}, {"u32", DeviceIds::kU32}}));
+  return upload_arrays(context, a_,
+                       device_options.get_enum<DeviceIds>("opencl_ids", {{"auto", DeviceIds::kAuto},
+                                                                         {"u16", DeviceIds::kU16},
+                                                                         {"u32", DeviceIds::kU32}}),
+                       device_options.get_bool("opencl_skip_faces"));
 }
 
 void BiclusterTransfer::save(ArchiveWriter& w) const {
@@ -618,6 +661,14 @@ CompressorEntry registry_entry() {
        {"auto", "u16", "u32"},
        "OpenCL phase 2 ids: u16 = the stored deltas decoded in the kernel, u32 = expanded at "
        "upload (twice the bytes, no decoding), auto = u32 on CPUs, u16 on GPUs"},
+      {"opencl_skip_faces",
+       ParamType::kBool,
+       "true",
+       std::nullopt,
+       std::nullopt,
+       {},
+       "phase 1 skips biclusters whose columns all lie on cube faces the light leaves black "
+       "(bit-identical; false computes them, for comparisons)"},
   };
   e.create = [](const ParamSet& params) -> std::unique_ptr<Compressor> {
     return std::make_unique<BiclusterCompressor>(static_cast<std::uint64_t>(params.get_int("seed")),

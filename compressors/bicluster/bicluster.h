@@ -130,7 +130,17 @@ class BiclusterTransfer final : public CompressedTransfer {
   double declared_error_bound() const override { return a_.bound; }
   ErrorNorm declared_error_norm() const override { return ErrorNorm::kRelativeL1; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
+  /// Phase 1 skips biclusters whose columns all lie on faces the light leaves dark
+  /// (bicluster_culling.h): bit-identical.
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
+  /// relight() with phase 1 reading the biclusters that touch the faces in `lit` only
+  /// (relight() passes lit_faces(light); kAllFaces skips nothing, for comparisons).
+  void relight_faces(const LightCoeffs& light, std::uint32_t lit, LocalRadiance& out) const;
+  /// Phase 2 over the slices holding the vertices' rows, storing only those rows; phase 1 whole
+  /// (bicluster_culling.h says why).
+  bool supports_vertex_subset() const override { return true; }
+  void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
+                        LocalRadiance& out) const override;
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,
                                           const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;
@@ -138,12 +148,27 @@ class BiclusterTransfer final : public CompressedTransfer {
  private:
   bool narrow() const { return a_.pixel_count <= 65536; }
   bool narrow_rows() const { return a_.rows() < 65535; }  // rows and the sentinel fit a u16
+  // out = the shape relight() writes; the products P of phase 1 (float4 RGB + pad each).
+  void prepare_output(LocalRadiance& out) const;
+  void phase1(const LightCoeffs& light, std::uint32_t lit, float* products) const;
+  // Phase 2 of slices[0..count) (all slices when `slices` is null), storing the lanes whose bit
+  // is set in lanes[i] (all lanes when `lanes` is null).
+  void phase2(const float* products, const std::uint32_t* slices, const std::uint8_t* lanes,
+              std::size_t count, LocalRadiance& out) const;
+
   BiclusterArrays a_;
   std::size_t incidences_ = 0;
+  // Derived at construction, not stored (bicluster_culling.h): the cube faces of each
+  // bicluster's columns (1 byte per bicluster) and each row's lane in phase 2 (4 bytes per row).
+  std::vector<std::uint8_t> faces_;
+  std::vector<std::uint32_t> row_lanes_;
 };
 
+/// `skip_faces`: phase 1 skips the biclusters on cube faces the light leaves dark (device option
+/// opencl_skip_faces; bit-identical either way).
 std::unique_ptr<DeviceRelighter> upload_arrays(ClContext& context, const BiclusterArrays& a,
-                                               DeviceIds device_ids = DeviceIds::kAuto);
+                                               DeviceIds device_ids = DeviceIds::kAuto,
+                                               bool skip_faces = true);
 
 CompressorEntry registry_entry();
 

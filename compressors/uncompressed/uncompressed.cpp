@@ -4,6 +4,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/opencl/cl_device.h"
+#include "prtlab/sphere/lit_faces.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
 
@@ -33,6 +34,7 @@ Options options_from(const ParamSet& params) {
                                                               {"rows", KernelVariant::kRows},
                                                               {"lanes", KernelVariant::kLanes}});
   o.lanes = static_cast<int>(params.get_int("opencl_lanes"));
+  o.skip_faces = params.get_bool("opencl_skip_faces");
   // The range is checked by ParamSet; the power of two is the reduction's requirement.
   if (!std::has_single_bit(static_cast<unsigned>(o.lanes)))
     throw ParameterError(
@@ -61,7 +63,8 @@ KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device)
   return device.is_cpu ? KernelVariant::kRows : KernelVariant::kLanes;
 }
 
-UncompressedTransfer::UncompressedTransfer(TransferMatrix transfer) : t_(std::move(transfer)) {}
+UncompressedTransfer::UncompressedTransfer(TransferMatrix transfer)
+    : t_(std::move(transfer)), faces_(t_) {}
 
 StorageReport UncompressedTransfer::storage() const {
   const std::uint64_t nnz = t_.nnz();
@@ -96,12 +99,29 @@ void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out)
       out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
     out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
   }
-  relight_exact(t_, light.values, out.values);
+  const std::uint32_t lit = lit_faces(light.values);
+  if (lit == kAllFaces || faces_.empty()) {
+    relight_exact(t_, light.values, out.values);
+  } else {
+    relight_culled(t_, faces_, light.values, lit, true, {}, out.values);
+  }
+}
+
+void UncompressedTransfer::relight_vertices(const LightCoeffs& light,
+                                            std::span<const std::uint32_t> vertices,
+                                            LocalRadiance& out) const {
+  check_pixel_light(light, t_.cols(), kName);
+  check_vertex_subset(vertices, t_.vertex_count(), kName);
+  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() ||
+      out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
+    out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
+  }
+  relight_culled(t_, faces_, light.values, lit_faces(light.values), false, vertices, out.values);
 }
 
 std::unique_ptr<DeviceRelighter> UncompressedTransfer::upload(
     ClContext& context, const ParamSet& device_options) const {
-  return upload_transfer(context, t_, options_from(device_options));
+  return upload_transfer(context, t_, options_from(device_options), &faces_);
 }
 
 void UncompressedTransfer::save(ArchiveWriter& archive) const {
@@ -163,6 +183,14 @@ CompressorEntry registry_entry() {
        32.0,
        {},
        "work-items per row of the lanes variant (a power of two)"},
+      {"opencl_skip_faces",
+       ParamType::kBool,
+       "true",
+       std::nullopt,
+       std::nullopt,
+       {},
+       "rows variant: skip the entries on cube faces the light leaves black (bit-identical; "
+       "false sums them, for comparisons)"},
   };
   e.lossless = true;
   // 2: the device options left the saved state.

@@ -8,6 +8,7 @@
 //   opencl_kernel  auto | rows | lanes   which OpenCL variant upload() builds; auto picks by
 //                                        device type (rows on CPUs, lanes on GPUs)
 //   opencl_lanes   1..32, a power of two lanes per row of the `lanes` variant
+//   opencl_skip_faces  bool              rows variant: skip dark cube faces (bit-identical)
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -15,6 +16,7 @@
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "uncompressed/uncompressed_culled.h"
 
 namespace prt {
 
@@ -33,7 +35,8 @@ KernelVariant resolve_variant(KernelVariant requested, const DeviceInfo& device)
 
 struct Options {
   KernelVariant kernel = KernelVariant::kAuto;
-  int lanes = 8;  ///< power of two in [1, 32]
+  int lanes = 8;           ///< power of two in [1, 32]
+  bool skip_faces = true;  ///< rows variant: skip the entries of cube faces the light leaves dark
 };
 /// The device options of upload() (ParameterError for a lane count that is no power of two).
 Options options_from(const ParamSet& device_options);
@@ -51,19 +54,31 @@ class UncompressedTransfer final : public CompressedTransfer {
   double flops_per_relight() const override { return 2.0 * static_cast<double>(t_.nnz()); }
   double declared_error_bound() const override { return 0.0; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
+  /// Skips the entries of cube faces the light leaves dark (uncompressed_culled.h): still
+  /// bit-identical to relight_exact.
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
+  bool supports_vertex_subset() const override { return true; }
+  void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
+                        LocalRadiance& out) const override;
+  /// Where each row's faces begin (built at construction; not stored: derived from T).
+  const FaceTable& faces() const { return faces_; }
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,
                                           const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;
 
  private:
   TransferMatrix t_;
+  FaceTable faces_;
 };
 
 /// T resident on `context`'s device, relit by the variant `options` asks for (resolved with
 /// resolve_variant). The context must outlive the returned relighter.
+/// `faces` (may be empty: no face skipping) is uploaded for the rows variant, which skips dark
+/// faces and relights vertex subsets; the lanes variant does neither (its reduction order has no
+/// subset kernel yet), and says so in supports_vertex_subset().
 std::unique_ptr<DeviceRelighter> upload_transfer(ClContext& context, const TransferMatrix& transfer,
-                                                 const Options& options);
+                                                 const Options& options,
+                                                 const FaceTable* faces = nullptr);
 
 /// The registry entry (registered by uncompressed.cpp).
 CompressorEntry registry_entry();

@@ -4,6 +4,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/opencl/cl_runtime.h"
+#include "prtlab/sphere/lit_faces.h"
 #include "uncompressed/uncompressed.h"
 
 namespace prt::uncompressed {
@@ -19,7 +20,8 @@ constexpr std::size_t kLanesWorkGroup = 128;
 
 class UncompressedDevice final : public DeviceRelighter {
  public:
-  UncompressedDevice(ClContext& ctx, const TransferMatrix& t, const Options& options)
+  UncompressedDevice(ClContext& ctx, const TransferMatrix& t, const Options& options,
+                     const FaceTable* faces)
       : ctx_(ctx),
         variant_(resolve_variant(options.kernel, ctx.info())),
         rows_(t.rows()),
@@ -56,15 +58,64 @@ class UncompressedDevice final : public DeviceRelighter {
     counts_ = upload(ctx, t.counts(), "uncompressed counts");
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "uncompressed light");
     out_ = make_buffer(ctx, rows_ * sizeof(Rgb), CL_MEM_WRITE_ONLY, "uncompressed local radiance");
-    bytes_ = buffer_bytes({&offsets_, &columns_, &counts_, &light_, &out_});
+    if (!lanes) {
+      // The culled kernels sum like uncompressed_rows (bit-identical rows); the lanes variant's
+      // reduction has no such twin, so it relights every row of every light.
+      culled_ = true;
+      has_faces_ = options.skip_faces && faces != nullptr && !faces->empty();
+      face_starts_ = has_faces_ ? upload(ctx, faces->starts(), "uncompressed face starts")
+                                : make_buffer(ctx, 0, CL_MEM_READ_ONLY, "uncompressed face starts");
+      rows_faces_ = make_kernel(program, "uncompressed_rows_faces");
+      vertices_kernel_ = make_kernel(program, "uncompressed_vertices");
+      subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "uncompressed vertex subset");
+    }
+    bytes_ = buffer_bytes({&offsets_, &columns_, &counts_, &light_, &out_, &face_starts_});
     set_args(kernel_, static_cast<cl_uint>(rows_), scale_, offsets_, columns_, counts_, light_,
              out_);
+  }
+
+  bool supports_vertex_subset() const override { return culled_; }
+
+  void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
+    check_vertex_subset(vertices, vertices_, kName);
+    if (!culled_) return;
+    subset_count_ = vertices.size();
+    if (vertices.size_bytes() > subset_capacity_) {
+      subset_capacity_ = vertices.size_bytes();
+      subset_ = make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "uncompressed vertex subset");
+    }
+    if (!vertices.empty())
+      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(),
+                   "uncompressed vertex subset");
+  }
+
+  double relight_subset_on_device(const LightCoeffs& light) override {
+    if (!culled_) return relight_on_device(light);
+    check_pixel_light(light, cols_, kName);
+    upload_light(ctx_, light_, light.values, light_host_, "uncompressed light");
+    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    if (subset_rows == 0) return 0.0;
+    set_args(vertices_kernel_, static_cast<cl_uint>(subset_rows), static_cast<cl_uint>(dim_),
+             subset_, scale_, offsets_, columns_, counts_, face_starts_, lit_of(light), light_,
+             out_);
+    cl::Event event = launch(ctx_, "uncompressed.vertices", vertices_kernel_,
+                             LaunchRange::linear(subset_rows, kRowsWorkGroup));
+    return event_milliseconds(event, ctx_.info().device_name,
+                              "timing of kernel uncompressed.vertices");
   }
 
   double relight_on_device(const LightCoeffs& light) override {
     check_pixel_light(light, cols_, kName);
     upload_light(ctx_, light_, light.values, light_host_, "uncompressed light");
     if (rows_ == 0) return 0.0;  // OpenCL forbids an empty launch
+    const cl_uint lit = culled_ ? lit_of(light) : kAllFaces;
+    if (lit != kAllFaces) {
+      set_args(rows_faces_, static_cast<cl_uint>(rows_), scale_, offsets_, columns_, counts_,
+               face_starts_, lit, light_, out_);
+      cl::Event event = launch(ctx_, "uncompressed.rows_faces", rows_faces_, range_);
+      return event_milliseconds(event, ctx_.info().device_name,
+                                "timing of kernel uncompressed.rows_faces");
+    }
     cl::Event event = launch(ctx_, launch_name_, kernel_, range_);
     return event_milliseconds(event, ctx_.info().device_name, "timing of kernel " + launch_name_);
   }
@@ -83,6 +134,11 @@ class UncompressedDevice final : public DeviceRelighter {
   const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
+  // The faces of `light` the kernels sum over (every face without a face table).
+  cl_uint lit_of(const LightCoeffs& light) const {
+    return has_faces_ ? lit_faces(light.values) : kAllFaces;
+  }
+
   ClContext& ctx_;
   KernelVariant variant_;
   std::size_t rows_, cols_;
@@ -95,13 +151,18 @@ class UncompressedDevice final : public DeviceRelighter {
   LaunchRange range_;
   cl::Buffer offsets_, columns_, counts_, light_, out_;
   std::uint64_t bytes_ = 0;
+  // Culling (rows variant only): the face table, the kernels, the vertex subset.
+  bool culled_ = false, has_faces_ = false;
+  cl::Buffer face_starts_, subset_;
+  cl::Kernel rows_faces_, vertices_kernel_;
+  std::size_t subset_count_ = 0, subset_capacity_ = 0;
 };
 
 }  // namespace
 
 std::unique_ptr<DeviceRelighter> upload_transfer(ClContext& context, const TransferMatrix& transfer,
-                                                 const Options& options) {
-  return std::make_unique<UncompressedDevice>(context, transfer, options);
+                                                 const Options& options, const FaceTable* faces) {
+  return std::make_unique<UncompressedDevice>(context, transfer, options, faces);
 }
 
 }  // namespace prt::uncompressed

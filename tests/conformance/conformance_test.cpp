@@ -17,6 +17,9 @@
 //     saved file (kFile* below);
 //   - determinism: two compressions with the same seed relight bit-identically;
 //   - the output basis of every result (and of its relight) is the one the entry declares;
+//   - per backend that supports_vertex_subset() (C++, and each device option combination whose
+//     relighter does): the subset's rows equal the full relight's bit for bit, also for a light
+//     black on three cube faces, and the other rows keep their values;
 //   - per backend: an unknown parameter and every out-of-range value are ParameterErrors;
 //   - per backend with a size knob: storage at the two ends of the knob's range moves in the
 //     declared direction (or stays) on one synthetic case.
@@ -28,6 +31,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -317,6 +321,112 @@ TEST_P(Conformance, OpenClMatchesTheCppReference) {
       }
     }
   }
+}
+
+// A light of the case black on cube faces 0, 2 and 5 (the faces a backend may skip).
+Cubemap dark_faces(const Cubemap& light) {
+  Cubemap out = light;
+  const std::size_t per_face = out.radiance.size() / 6;
+  for (const int f : {0, 2, 5})
+    std::fill_n(out.radiance.begin() + f * per_face, per_face, Rgb(0.f));
+  return out;
+}
+
+// Every other vertex and the last one: a subset with gaps, both ends, and more than one slice.
+std::vector<std::uint32_t> sample_subset(std::size_t vertices) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t v = 0; v < vertices; v += 2) out.push_back(static_cast<std::uint32_t>(v));
+  if (vertices > 0 && (vertices - 1) % 2 != 0)
+    out.push_back(static_cast<std::uint32_t>(vertices - 1));
+  return out;
+}
+
+// Rows of `subset` are a's bit for bit, the others b's.
+::testing::AssertionResult rows_from(const LocalRadiance& out, const LocalRadiance& a,
+                                     const LocalRadiance& b,
+                                     const std::vector<std::uint32_t>& subset) {
+  if (out.values.size() != a.values.size() || out.values.size() != b.values.size())
+    return ::testing::AssertionFailure()
+           << "sizes " << out.values.size() << ", " << a.values.size() << ", " << b.values.size();
+  std::vector<bool> in(out.vertices, false);
+  for (const std::uint32_t v : subset) in[v] = true;
+  const std::size_t dim = static_cast<std::size_t>(out.dim);
+  for (std::size_t r = 0; r < out.values.size(); ++r) {
+    const LocalRadiance& want = in[r / dim] ? a : b;
+    if (std::memcmp(&out.values[r], &want.values[r], sizeof(Rgb)) != 0)
+      return ::testing::AssertionFailure()
+             << "row " << r << " (vertex " << r / dim << (in[r / dim] ? ", in" : ", not in")
+             << " the subset) differs: " << out.values[r].x << " vs " << want.values[r].x;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// relight_vertices writes relight()'s rows for the subset, bit for bit, and leaves the others.
+TEST_P(Conformance, VertexSubsetRowsEqualTheFullRelight) {
+  const CompressedTransfer& ct = compressed();
+  if (!ct.supports_vertex_subset())
+    GTEST_SKIP() << backend() << " relights every vertex (supports_vertex_subset() is false)";
+  const std::vector<std::uint32_t> subset = sample_subset(data().transfer.vertex_count());
+  for (std::size_t l = 0; l < data().lights.size(); ++l) {
+    for (const bool dark : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << "light " << l << (dark ? ", black on 3 faces" : ""));
+      const Cubemap light = dark ? dark_faces(data().lights[l]) : data().lights[l];
+      const LightCoeffs coeffs = ct.project_light(light);
+      LocalRadiance full;
+      ct.relight(coeffs, full);
+      LocalRadiance before = full;
+      std::fill(before.values.begin(), before.values.end(), Rgb(-7.f));
+      LocalRadiance out = before;
+      ct.relight_vertices(coeffs, subset, out);
+      EXPECT_TRUE(rows_from(out, full, before, subset));
+      LocalRadiance none = before;
+      ct.relight_vertices(coeffs, {}, none);
+      EXPECT_TRUE(bit_identical(none, before)) << "an empty subset changed rows";
+    }
+  }
+  LocalRadiance out;
+  const std::vector<std::uint32_t> unsorted{1, 0};
+  const LightCoeffs coeffs = ct.project_light(data().lights[0]);
+  if (data().transfer.vertex_count() >= 2) {
+    EXPECT_THROW(ct.relight_vertices(coeffs, unsorted, out), ParameterError);
+  }
+  const std::vector<std::uint32_t> beyond{
+      static_cast<std::uint32_t>(data().transfer.vertex_count())};
+  EXPECT_THROW(ct.relight_vertices(coeffs, beyond, out), ParameterError);
+}
+
+// The device's subset relight writes its full relight's rows for the subset, bit for bit, and
+// leaves the rows of the previous light elsewhere, over every device option combination.
+TEST_P(Conformance, DeviceVertexSubsetRowsEqualTheFullRelight) {
+  ClContext* ctx = default_context();
+  if (ctx == nullptr)
+    GTEST_SKIP() << "no OpenCL device on this machine: the device path is not tested here";
+  const auto ct = compress(backend(), data(), {});
+  if (data().transfer.rows() == 0) GTEST_SKIP() << "no rows";
+  const std::vector<std::uint32_t> subset = sample_subset(data().transfer.vertex_count());
+  bool any = false;
+  for (const Params& options : device_param_sets(entry())) {
+    SCOPED_TRACE("device options " + describe(options));
+    auto device = upload_compressed(*ct, *ctx, options);
+    ASSERT_NE(device, nullptr);
+    if (!device->supports_vertex_subset()) continue;
+    any = true;
+    const LightCoeffs first = ct->project_light(data().lights[0]);
+    for (const bool dark : {false, true}) {
+      SCOPED_TRACE(dark ? "black on 3 faces" : "all faces lit");
+      const Cubemap second_light = dark ? dark_faces(data().lights.back()) : data().lights.back();
+      const LightCoeffs second = ct->project_light(second_light);
+      LocalRadiance full_first, full_second, out;
+      device->relight(first, full_first);
+      device->relight(second, full_second);
+      device->relight(first, out);
+      device->set_vertex_subset(subset);
+      device->relight_subset_on_device(second);
+      download(*ctx, device->output_buffer(), std::span<Rgb>(out.values), "conformance subset");
+      EXPECT_TRUE(rows_from(out, full_second, full_first, subset));
+    }
+  }
+  if (!any) GTEST_SKIP() << "no device option combination of " << backend() << " relights subsets";
 }
 
 TEST_P(Conformance, SaveLoadRoundTripIsIdentical) {

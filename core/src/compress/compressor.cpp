@@ -23,4 +23,17 @@ void check_pixel_light(const LightCoeffs& light, std::size_t pixels, std::string
         pixels, light.basis, light.values.size()));
 }
 
+void check_vertex_subset(std::span<const std::uint32_t> vertices, std::size_t vertex_count,
+                         std::string_view backend) {
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (vertices[i] >= vertex_count)
+      throw ParameterError(fmt::format("{}: vertex subset: vertex {} is not below the {} vertices",
+                                       backend, vertices[i], vertex_count));
+    if (i > 0 && vertices[i] <= vertices[i - 1])
+      throw ParameterError(
+          fmt::format("{}: vertex subset: vertices must be sorted and unique ({} follows {})",
+                      backend, vertices[i], vertices[i - 1]));
+  }
+}
+
 }  // namespace prt

@@ -12,6 +12,7 @@
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/device_radiance_to_bins.h"
+#include "prtlab/render/visible_vertices.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 
 namespace prt {
@@ -51,6 +52,29 @@ struct FrameRenderer::Impl {
   bool rendered = false;
   FrameStageTimes pending;
   FrameCounters counters;
+  std::uint64_t pending_relit = 0;
+
+  // Culling. A vertex is current when the current light has reached it: relit_gen[v] (or
+  // all_gen, after a full relight) equals light_gen.
+  bool cull = true;
+  std::vector<std::uint32_t> visible;
+  std::optional<LightCoeffs> light;
+  std::uint64_t light_gen = 0, all_gen = 0;
+  std::vector<std::uint64_t> relit_gen;
+  LocalRadiance relit;  // C++ path with kToPixelBins: L* in the backend's basis, kept
+
+  bool subset_capable() const {
+    if (relighter) return path == LightPath::kDirect && relighter->supports_vertex_subset();
+    return transfer->supports_vertex_subset();
+  }
+  bool culls() const { return cull && subset_capable(); }
+  bool current(std::uint32_t v) const { return all_gen == light_gen || relit_gen[v] == light_gen; }
+
+  // Relights every vertex with `light`.
+  void relight_all();
+  // Relights `vertices` (sorted, unique) with `light`; the device's subset is `vertices` after.
+  void relight_subset(const std::vector<std::uint32_t>& vertices);
+  void check_radiance() const;
 
   Impl(Mesh m, ShadingMaterials mat, std::shared_ptr<const CompressedTransfer> t, ClContext* c,
        const ShadingOptions& o)
@@ -61,6 +85,66 @@ struct FrameRenderer::Impl {
         options(o),
         tracer(mesh) {}
 };
+
+void FrameRenderer::Impl::check_radiance() const {
+  check_light_basis(basis, radiance, mesh.positions.size(),
+                    fmt::format("frame renderer: backend '{}'", transfer->backend()));
+}
+
+void FrameRenderer::Impl::relight_all() {
+  if (relighter && path == LightPath::kDirect) {
+    // The shader reads L* where the relight left it: no read-back, no upload.
+    pending.relight_kernel_ms += relighter->relight_on_device(*light);
+    radiance_on_host = false;
+  } else if (relighter) {
+    if (!to_bins) {
+      // The first light change reads the relight back once: its dimension sizes the converter.
+      LocalRadiance first;
+      pending.relight_kernel_ms += relighter->relight(*light, first);
+      if (first.vertices != mesh.positions.size())
+        throw ParameterError(
+            fmt::format("frame renderer: backend '{}' relit {} vertices; the mesh has {}",
+                        transfer->backend(), first.vertices, mesh.positions.size()));
+      to_bins.emplace(*context, *grid, first.dim, first.vertices);
+    } else {
+      pending.relight_kernel_ms += relighter->relight_on_device(*light);
+    }
+    pending.relight_kernel_ms += to_bins->run(relighter->output_buffer());
+    radiance_on_host = false;
+  } else if (path == LightPath::kToPixelBins) {
+    transfer->relight(*light, relit);
+    radiance = to_pixel_basis(relit, *grid);
+    radiance_on_host = true;
+    check_radiance();
+  } else {
+    transfer->relight(*light, radiance);
+    radiance_on_host = true;
+    check_radiance();
+  }
+  all_gen = light_gen;
+  pending_relit += mesh.positions.size();
+  counters.relit_vertices += mesh.positions.size();
+}
+
+void FrameRenderer::Impl::relight_subset(const std::vector<std::uint32_t>& vertices) {
+  if (relighter) {
+    relighter->set_vertex_subset(vertices);
+    pending.relight_kernel_ms += relighter->relight_subset_on_device(*light);
+    radiance_on_host = false;
+  } else if (path == LightPath::kToPixelBins) {
+    transfer->relight_vertices(*light, vertices, relit);
+    radiance = to_pixel_basis(relit, *grid);
+    radiance_on_host = true;
+    check_radiance();
+  } else {
+    transfer->relight_vertices(*light, vertices, radiance);
+    radiance_on_host = true;
+    check_radiance();
+  }
+  for (const std::uint32_t v : vertices) relit_gen[v] = light_gen;
+  pending_relit += vertices.size();
+  counters.relit_vertices += vertices.size();
+}
 
 FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
                              std::shared_ptr<const CompressedTransfer> transfer, ClContext* context,
@@ -78,6 +162,7 @@ FrameRenderer::FrameRenderer(Mesh mesh, ShadingMaterials materials,
   Impl& s = *impl_;
   s.basis = basis;
   s.path = path;
+  s.relit_gen.assign(s.mesh.positions.size(), 0);
   if (s.path == LightPath::kToPixelBins) {
     const int side = static_cast<int>(std::lround(std::sqrt(s.basis.dim)));
     if (side * side != s.basis.dim)
@@ -113,41 +198,48 @@ void FrameRenderer::set_camera(const Camera& camera) {
   }
   s.have_camera = true;
   ++s.counters.gbuffer_traces;
+
+  t0 = Clock::now();
+  s.visible = prt::visible_vertices(s.gbuffer, s.mesh);
+  std::vector<std::uint32_t> missing;
+  if (s.light) {
+    for (const std::uint32_t v : s.visible)
+      if (!s.current(v)) missing.push_back(v);
+  }
+  s.pending.cull_ms += ms_since(t0);
+  if (!missing.empty()) {
+    // Only a culled light change leaves vertices behind, so the backend relights subsets.
+    t0 = Clock::now();
+    s.relight_subset(missing);
+    s.pending.relight_ms += ms_since(t0);
+  }
+  if (s.relighter && s.culls()) {
+    t0 = Clock::now();
+    s.relighter->set_vertex_subset(s.visible);
+    s.pending.cull_ms += ms_since(t0);
+  }
 }
 
 void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* background) {
   Impl& s = *impl_;
   auto t0 = Clock::now();
-  const LightCoeffs light = s.transfer->project_light(environment);
+  s.light = s.transfer->project_light(environment);
+  ++s.light_gen;
   s.pending.project_ms += ms_since(t0);
   t0 = Clock::now();
-  if (s.relighter && s.path == LightPath::kDirect) {
-    // The shader reads L* where the relight left it: no read-back, no upload.
-    s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
-    s.radiance_on_host = false;
-  } else if (s.relighter) {
-    if (!s.to_bins) {
-      // The first light change reads the relight back once: its dimension sizes the converter.
-      LocalRadiance first;
-      s.pending.relight_kernel_ms += s.relighter->relight(light, first);
-      if (first.vertices != s.mesh.positions.size())
-        throw ParameterError(
-            fmt::format("frame renderer: backend '{}' relit {} vertices; the mesh has {}",
-                        s.transfer->backend(), first.vertices, s.mesh.positions.size()));
-      s.to_bins.emplace(*s.context, *s.grid, first.dim, first.vertices);
+  if (s.have_camera && s.culls()) {
+    // The device's subset is already the visible set (set_camera uploaded it).
+    if (s.relighter) {
+      s.pending.relight_kernel_ms += s.relighter->relight_subset_on_device(*s.light);
+      s.radiance_on_host = false;
+      for (const std::uint32_t v : s.visible) s.relit_gen[v] = s.light_gen;
+      s.pending_relit += s.visible.size();
+      s.counters.relit_vertices += s.visible.size();
     } else {
-      s.pending.relight_kernel_ms += s.relighter->relight_on_device(light);
+      s.relight_subset(s.visible);
     }
-    s.pending.relight_kernel_ms += s.to_bins->run(s.relighter->output_buffer());
-    s.radiance_on_host = false;
   } else {
-    LocalRadiance relit;
-    s.transfer->relight(light, relit);
-    s.radiance =
-        s.path == LightPath::kToPixelBins ? to_pixel_basis(relit, *s.grid) : std::move(relit);
-    s.radiance_on_host = true;
-    check_light_basis(s.basis, s.radiance, s.mesh.positions.size(),
-                      fmt::format("frame renderer: backend '{}'", s.transfer->backend()));
+    s.relight_all();
   }
   s.pending.relight_ms += ms_since(t0);
   s.environment.emplace(environment);
@@ -160,6 +252,22 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
     s.pending.upload_ms += ms_since(t0);
   }
   ++s.counters.relights;
+}
+
+void FrameRenderer::set_culling(bool on) {
+  Impl& s = *impl_;
+  if (on && !s.cull && s.relighter && s.culls() && s.have_camera)
+    s.relighter->set_vertex_subset(s.visible);
+  s.cull = on;
+}
+bool FrameRenderer::culling() const {
+  return impl_->cull;
+}
+bool FrameRenderer::culls() const {
+  return impl_->culls();
+}
+const std::vector<std::uint32_t>& FrameRenderer::visible_vertices() const {
+  return impl_->visible;
 }
 
 FrameStats FrameRenderer::render() {
@@ -177,8 +285,9 @@ FrameStats FrameRenderer::render() {
   s.pending.shade_ms = ms_since(t0);
   s.rendered = true;
   ++s.counters.frames;
-  FrameStats stats{s.pending, s.counters};
+  FrameStats stats{s.pending, s.counters, s.pending_relit, s.visible.size()};
   s.pending = {};
+  s.pending_relit = 0;
   return stats;
 }
 

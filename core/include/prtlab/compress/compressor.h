@@ -72,6 +72,22 @@ class DeviceRelighter {
   /// LocalRadiance::values, in output_basis()). The frame loop shades from it directly, so a
   /// light change never copies L* through the host. Valid after the first relight.
   virtual const cl::Buffer& output_buffer() const = 0;
+
+  // ---- optional: relighting a subset of the vertices (docs/adding-a-compressor.md, "Relighting
+  // a vertex subset"; the frame loop's culling, docs/rendering.md). A backend opts in by
+  // overriding all three; the defaults relight every row.
+
+  /// Whether relight_subset_on_device() leaves the rows outside the subset untouched.
+  virtual bool supports_vertex_subset() const { return false; }
+  /// The vertices (sorted, unique, < the vertex count: check_vertex_subset) the next
+  /// relight_subset_on_device() calls relight. The backend uploads what it relights them from
+  /// (an id list, the slices holding their rows), once per set rather than once per light.
+  virtual void set_vertex_subset(std::span<const std::uint32_t> vertices) { (void)vertices; }
+  /// Relight the subset's rows in output_buffer(), bit-identical to relight_on_device()'s values
+  /// there; when supports_vertex_subset(), every other row keeps its value. Returns kernel ms.
+  virtual double relight_subset_on_device(const LightCoeffs& light) {
+    return relight_on_device(light);
+  }
 };
 
 class CompressedTransfer {
@@ -105,6 +121,19 @@ class CompressedTransfer {
   virtual LightCoeffs project_light(const Cubemap& radiance) const = 0;
   /// C++ reference relight: out = T~ L (resized as needed).
   virtual void relight(const LightCoeffs& light, LocalRadiance& out) const = 0;
+  /// Whether relight_vertices() relights only the given vertices (the frame loop's culling).
+  /// A backend opts in by overriding both (docs/adding-a-compressor.md, "Relighting a vertex
+  /// subset").
+  virtual bool supports_vertex_subset() const { return false; }
+  /// Relight the rows of `vertices` (sorted, unique, < the vertex count: check_vertex_subset)
+  /// into `out`: bit-identical to relight()'s values there. When supports_vertex_subset(), every
+  /// other row keeps its value (`out` is resized, and then zero, only when its shape is not
+  /// relight()'s). Default: relight(), every row.
+  virtual void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
+                                LocalRadiance& out) const {
+    (void)vertices;
+    relight(light, out);
+  }
   /// OpenCL relight; a backend without a kernel returns nullptr (the conformance suite
   /// reports that as a failure for registered backends). The relighter may keep a reference
   /// to `context`, which must outlive it. `device_options` holds the backend's
@@ -128,6 +157,11 @@ void check_transfer_shape(const TransferInput& input, std::string_view backend);
 /// Throws ParameterError naming `backend` unless `light` is a pixel-basis light of `pixels`
 /// values.
 void check_pixel_light(const LightCoeffs& light, std::size_t pixels, std::string_view backend);
+
+/// Throws ParameterError naming `backend` unless `vertices` is sorted, unique and below
+/// `vertex_count` (what relight_vertices and set_vertex_subset accept).
+void check_vertex_subset(std::span<const std::uint32_t> vertices, std::size_t vertex_count,
+                         std::string_view backend);
 
 class Compressor {
  public:

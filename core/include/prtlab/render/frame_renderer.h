@@ -7,6 +7,12 @@
 //                                   it), upload the environment as the background
 //   render()                        shade the current G-buffer with the current L*
 //
+// Culling (docs/rendering.md, "Culling"; on by default, set_culling): a frame reads L* only at
+// the vertices of its hit triangles (visible_vertices.h), so when the backend can relight a
+// vertex subset (CompressedTransfer / DeviceRelighter::supports_vertex_subset) a light change
+// relights only those, and a view change relights the newly visible vertices that the current
+// light has not reached yet. The image is bit-identical to the unculled one.
+//
 // A FrameRenderer holds the scene's mesh, its materials, one compressed transfer (any backend,
 // through the core interface only), the backend's DeviceRelighter and a DeviceBtfShader when
 // an OpenCL context is given, else the C++ relight and shade_frame_reference, and a
@@ -18,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/compress/compressor.h"
@@ -45,10 +52,14 @@ struct FrameStageTimes {
   double shade_kernel_ms = 0;
   double view_cache_kernel_ms = 0;
   double relight_kernel_ms = 0;  ///< device time of the relight kernels (0 on the C++ path)
+  /// View change: the visible vertex set and its upload to the relighter (culling only; the
+  /// relight of newly visible vertices counts as relight_ms).
+  double cull_ms = 0;
 
   /// Sum of the wall-clock stages: the frame time.
   double total_ms() const {
-    return gbuffer_ms + gbuffer_upload_ms + project_ms + relight_ms + upload_ms + shade_ms;
+    return gbuffer_ms + gbuffer_upload_ms + cull_ms + project_ms + relight_ms + upload_ms +
+           shade_ms;
   }
 };
 
@@ -57,11 +68,16 @@ struct FrameCounters {
   std::uint64_t frames = 0;          ///< render() calls
   std::uint64_t gbuffer_traces = 0;  ///< set_camera() calls
   std::uint64_t relights = 0;        ///< set_environment() calls (each relights once)
+  /// Vertices relit (every vertex of a full relight, the subset of a culled one, the newly
+  /// visible ones of a view change).
+  std::uint64_t relit_vertices = 0;
 };
 
 struct FrameStats {
   FrameStageTimes times;  ///< of the stages run since the previous render()
   FrameCounters counters;
+  std::uint64_t relit_vertices = 0;    ///< vertices relit since the previous render()
+  std::uint64_t visible_vertices = 0;  ///< vertices of the current view's hit triangles
 };
 
 class FrameRenderer {
@@ -90,6 +106,17 @@ class FrameRenderer {
   /// when given, is what misses show (e.g. a finer cubemap of the same environment); without it
   /// misses show the lighting cubemap itself.
   void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
+  /// Culling on (the default) or off. Off, every light change relights every vertex; either
+  /// way a view change relights the visible vertices the current light has not reached, so L*
+  /// is never stale where the frame reads it.
+  void set_culling(bool on);
+  bool culling() const;
+  /// Whether light changes are culled: culling() and the backend relights vertex subsets on
+  /// this path (device: and its L* is shaded directly, not converted to bins).
+  bool culls() const;
+  /// The vertices of the current view's hit triangles, sorted (visible_vertices.h).
+  const std::vector<std::uint32_t>& visible_vertices() const;
+
   /// Shade (needs a camera and an environment: ParameterError otherwise).
   FrameStats render();
   /// The last rendered image (read back from the device on the OpenCL path).
@@ -100,7 +127,9 @@ class FrameRenderer {
   const Mesh& mesh() const;
   const GBuffer& gbuffer() const;  ///< of the current camera
   /// L* of the current environment in the materials' light basis (on the device path read back
-  /// on the first call after a light change).
+  /// on the first call after a light change). With culling, only the rows of vertices relit
+  /// for the current light (at least the visible ones) are current; others may hold an earlier
+  /// light's values (or zeros).
   const LocalRadiance& radiance() const;
   /// The device shader (nullptr on the C++ path): byte counts, hit pixels.
   const DeviceBtfShader* device_shader() const;
