@@ -215,6 +215,43 @@ void sweep_section(std::string& md, const json& result, const json& scene, const
                       p->at("pareto_storage") == true ? "yes" : "");
   }
   md += "\n";
+  if (fps) {
+    // What culling and dark faces save: the relight stage of light-change frames.
+    std::vector<std::string> envs;
+    for (const auto& env : result.at("experiment").at("environments"))
+      envs.push_back(env.at("name").get<std::string>());
+    md +=
+        "Skipping what a frame does not need (relight stage of light-change frames, median; "
+        "culled: only the vertices of the view's hit triangles; identical: the culled frame "
+        "equals the full one bit for bit):\n\n";
+    md +=
+        "| backend | parameters | culls | visible vertices | relight ms culled | relight ms "
+        "full | speedup | identical |";
+    for (const auto& e : envs) md.append(" relight ms, ").append(e).append(" |");
+    md += "\n|---|---|---|---:|---:|---:|---:|---|";
+    for (std::size_t i = 0; i < envs.size(); ++i) md += "---:|";
+    md += "\n";
+    for (const json* p : points_of(result, name)) {
+      md += fmt::format(
+          "| `{}` | {} | {} | {} of {} | {} | {} | {} | {} |", p->at("backend").get<std::string>(),
+          params_cell(p->at("params")), p->value("culls", false) ? "yes" : "no",
+          p->value("visible_vertices", json(nullptr)).dump(), p->at("vertices").dump(),
+          fmt_ms(p->value("relight_ms_frame_culled", json(nullptr))),
+          fmt_ms(p->value("relight_ms_frame_unculled", json(nullptr))),
+          fmt_num(p->value("cull_speedup", json(nullptr)), "{:.2f}x"),
+          p->value("cull_identical", json(nullptr)).is_boolean()
+              ? (p->at("cull_identical").get<bool>() ? "yes" : "**NO**")
+              : "n/a");
+      for (const auto& e : envs) {
+        json ms = nullptr;
+        for (const auto& er : p->at("errors"))
+          if (er.at("environment") == e) ms = er.value("relight_ms_frame", json(nullptr));
+        md.append(" ").append(fmt_ms(ms)).append(" |");
+      }
+      md += "\n";
+    }
+    md += "\n";
+  }
   const std::string plot = fmt::format("pareto-{}.png", name);
   if (fs::exists(folder / plot))
     md += fmt::format("![error against relight time and storage]({})\n\n", plot);

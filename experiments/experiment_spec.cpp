@@ -90,25 +90,29 @@ std::map<std::string, std::string> param_table(const fs::path& file, const toml:
 EnvironmentSpec parse_environment(const fs::path& file, const std::string& name) {
   EnvironmentSpec e;
   // "sun", "sun:RATIO" or "sun-RATIO" (not "sunset", a Blender world).
-  const bool sun = name == "sun" || name.starts_with("sun:") ||
+  const bool only = name.starts_with("sunonly");
+  const std::size_t stem = only ? 7 : 3;
+  const bool sun = name == "sun" || name == "sunonly" || name.starts_with("sun:") ||
+                   name.starts_with("sunonly:") ||
                    (name.starts_with("sun-") && name.size() > 4 &&
                     std::isdigit(static_cast<unsigned char>(name[4])));
   if (sun) {
     double ratio = 3e4;
-    if (name.size() > 3) {
+    if (name.size() > stem) {
       try {
         std::size_t used = 0;
-        ratio = std::stod(name.substr(4), &used);
-        if (used != name.size() - 4) throw std::invalid_argument("trailing");
+        ratio = std::stod(name.substr(stem + 1), &used);
+        if (used != name.size() - stem - 1) throw std::invalid_argument("trailing");
       } catch (const std::exception&) {
-        throw InputError(
-            file, fmt::format("environment '{}': '{}' is not a number", name, name.substr(4)));
+        throw InputError(file, fmt::format("environment '{}': '{}' is not a number", name,
+                                           name.substr(stem + 1)));
       }
     }
     if (!(ratio > 0) || !std::isfinite(ratio))
       throw InputError(file, fmt::format("environment '{}': the sun ratio must be > 0", name));
     e.sun_ratio = ratio;
-    e.name = fmt::format("sun-{:.0e}", ratio);
+    e.sun_only = only;
+    e.name = fmt::format("{}-{:.0e}", only ? "sunonly" : "sun", ratio);
     return e;
   }
   try {
@@ -156,7 +160,8 @@ nlohmann::json evaluation_json(const ExperimentSpec& s) {
     envs.push_back(
         {{"name", e.name},
          {"file", e.file},
-         {"sun_ratio", e.sun_ratio ? nlohmann::json(*e.sun_ratio) : nlohmann::json(nullptr)}});
+         {"sun_ratio", e.sun_ratio ? nlohmann::json(*e.sun_ratio) : nlohmann::json(nullptr)},
+         {"sun_only", e.sun_only}});
   return {{"environments", envs},    {"views", s.views},     {"width", s.width},
           {"height", s.height},      {"repeats", s.repeats}, {"timing", s.timing},
           {"images", s.images},      {"fps", s.fps},         {"fps_frames", s.fps_frames},

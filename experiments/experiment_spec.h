@@ -24,11 +24,13 @@ enum class ExperimentKind {
 std::string_view to_string(ExperimentKind k);
 
 /// One environment of the evaluation: a lat-long EXR by name or path, or a procedural sun and
-/// sky ("sun" kind) whose sun is `sun_ratio` times brighter than the sky.
+/// sky ("sun:RATIO") whose sun is RATIO times brighter than the sky, or the sun alone
+/// ("sunonly:RATIO", every cube face but the sun's black: what face skipping is for).
 struct EnvironmentSpec {
   std::string name;  ///< as reported ("courtyard", "sun-1e+04")
   std::string file;  ///< resolved EXR path; empty for the procedural sun
   std::optional<double> sun_ratio;
+  bool sun_only = false;  ///< "sunonly:RATIO": sky and ground black, only the sun's faces lit
 };
 
 struct TargetSpec {

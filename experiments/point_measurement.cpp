@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
@@ -23,16 +24,16 @@ namespace {
 using json = nlohmann::json;
 
 // Bump when a point's record changes meaning or layout: cached points are then recomputed.
-constexpr std::uint32_t kPointVersion = 1;
+constexpr std::uint32_t kPointVersion = 2;
 constexpr const char* kPointKind = "experiment-point";
 
 // The procedural sun of the "sun" environments: a sky of unit-ish radiance and a sun `ratio`
 // times brighter, small (0.5 degrees, the real sun's angular radius is 0.27) so that it falls
 // into one or two cubemap pixels: the case where low-frequency bases fail most.
-SunSky sun_environment(double ratio, double rotate_deg = 0) {
+SunSky sun_environment(double ratio, bool sky, double rotate_deg = 0) {
   SunSky s;
-  s.sky = {0.6f, 0.75f, 1.0f};
-  s.ground = {0.2f, 0.18f, 0.15f};
+  s.sky = sky ? Rgb{0.6f, 0.75f, 1.0f} : Rgb{0.0f};
+  s.ground = sky ? Rgb{0.2f, 0.18f, 0.15f} : Rgb{0.0f};
   const float r = static_cast<float>(ratio * 0.75);
   s.sun = {r, r * 0.95f, r * 0.85f};
   s.sun_radius_rad = 0.5 * 3.14159265358979323846 / 180.0;
@@ -45,7 +46,8 @@ SunSky sun_environment(double ratio, double rotate_deg = 0) {
 }
 
 Cubemap environment_cubemap(const EnvironmentSpec& e, int resolution, double rotate_deg = 0) {
-  if (e.sun_ratio) return sun_environment(*e.sun_ratio, rotate_deg).to_cubemap(resolution);
+  if (e.sun_ratio)
+    return sun_environment(*e.sun_ratio, !e.sun_only, rotate_deg).to_cubemap(resolution);
   const LatLongImage img = load_latlong_exr(e.file);
   return resample_to_cubemap(rotate_deg == 0 ? img : rotate_latlong_y(img, rotate_deg), resolution);
 }
@@ -132,9 +134,9 @@ const std::vector<std::string>& point_record_columns() {
 }
 
 const std::vector<std::string>& error_record_columns() {
-  static const std::vector<std::string> columns = {"scene",        "backend",      "params",
-                                                   "environment",  "view",         "lstar_rel_l2",
-                                                   "image_rel_l2", "image_psnr_db"};
+  static const std::vector<std::string> columns = {
+      "scene",        "backend",      "params",        "environment",     "view",
+      "lstar_rel_l2", "image_rel_l2", "image_psnr_db", "relight_ms_frame"};
   return columns;
 }
 
@@ -287,6 +289,7 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     r["max_vertex_rel"] = ev.max_vertex_rel;
 
     json errors = json::array();
+    std::map<std::string, double> relight_by_env;  // median frame relight per environment
     ArchiveWriter w(kPointKind, kPointVersion);
     if (spec.images || spec.fps) {
       FrameRenderer renderer(b.scene.mesh, b.materials,
@@ -334,24 +337,71 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
           renderer.set_camera(orbit_camera(b.cameras.front(), 360.0 * i / spec.fps_frames));
           view_ms.push_back(renderer.render().times.total_ms());
         }
+        // Light changes with and without culling, interleaved so that load on the machine
+        // hits both alike; the relight stage alone shows what culling saves.
+        std::vector<double> relight_culled, relight_unculled, light_unculled;
         renderer.set_camera(b.cameras.front());
         (void)renderer.render();
         for (int i = 0; i < spec.fps_frames; ++i) {
-          renderer.set_environment(b.fps_lights[static_cast<std::size_t>(i)]);
-          light_ms.push_back(renderer.render().times.total_ms());
+          const Cubemap& light = b.fps_lights[static_cast<std::size_t>(i)];
+          renderer.set_culling(true);
+          renderer.set_environment(light);
+          const FrameStats culled = renderer.render();
+          light_ms.push_back(culled.times.total_ms());
+          relight_culled.push_back(culled.times.relight_ms);
+          renderer.set_culling(false);
+          renderer.set_environment(light);
+          const FrameStats full = renderer.render();
+          light_unculled.push_back(full.times.total_ms());
+          relight_unculled.push_back(full.times.relight_ms);
         }
+        // The image must not change: culled and unculled frames of the same light, bit for bit.
+        renderer.set_culling(true);
+        renderer.set_environment(b.fps_lights.front());
+        const FrameStats culled = renderer.render();
+        const RgbImage with_culling = renderer.image();
+        renderer.set_culling(false);
+        renderer.set_environment(b.fps_lights.front());
+        (void)renderer.render();
+        const RgbImage without = renderer.image();
+        // The relight stage under each environment (culled, at the first view): a light black
+        // on some cube faces relights faster where the backend skips their columns.
+        renderer.set_culling(true);
+        for (const auto& light : b.lights) {
+          std::vector<double> ms;
+          for (int i = 0; i < spec.fps_frames; ++i) {
+            renderer.set_environment(light.radiance);
+            ms.push_back(renderer.render().times.relight_ms);
+          }
+          relight_by_env[light.name] = median(ms);
+        }
+        r["culls"] = renderer.culls();
+        r["visible_vertices"] = culled.visible_vertices;
+        r["relight_ms_frame_culled"] = median(relight_culled);
+        r["relight_ms_frame_unculled"] = median(relight_unculled);
+        r["frame_ms_light_unculled"] = median(light_unculled);
+        r["cull_speedup"] = median(relight_culled) > 0
+                                ? json(median(relight_unculled) / median(relight_culled))
+                                : json(nullptr);
+        r["cull_identical"] = with_culling.pixels.size() == without.pixels.size() &&
+                              std::memcmp(with_culling.pixels.data(), without.pixels.data(),
+                                          with_culling.pixels.size() * sizeof(Rgb)) == 0;
         r["frame_ms_view"] = median(view_ms);
         r["frame_ms_light"] = median(light_ms);
         r["fps_view"] = 1000.0 / median(view_ms);
         r["fps_light"] = 1000.0 / median(light_ms);
       }
-    } else {
+    }
+    if (!spec.images)
       for (std::size_t l = 0; l < b.lights.size(); ++l)
         errors.push_back({{"environment", b.lights[l].name},
                           {"view", nullptr},
                           {"lstar_rel_l2", ev.errors[l].rel_l2},
                           {"image_rel_l2", nullptr},
                           {"image_psnr_db", nullptr}});
+    for (auto& e : errors) {
+      const auto it = relight_by_env.find(e.at("environment").get<std::string>());
+      e["relight_ms_frame"] = it == relight_by_env.end() ? json(nullptr) : json(it->second);
     }
     r["errors"] = errors;
     r["measure_seconds"] = seconds_since(tm);
