@@ -19,6 +19,10 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
+// The largest L* error (relative L2, worst environment) a lossless backend shows from float
+// rounding alone is around 1e-7; below this the report treats backends as exact.
+constexpr double kExactError = 1e-6;
+
 double num(const json& v) {
   return v.is_number() ? v.get<double>() : NAN;
 }
@@ -142,8 +146,40 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   std::sort(reached.begin(), reached.end(), [](const json* a, const json* b) {
     return num(a->at("lstar_rel_l2_mean")) < num(b->at("lstar_rel_l2_mean"));
   });
+  // Errors at float rounding are ties: two exact backends differ only in relight time.
+  const auto exact = [](const json* p) { return num(p->at("lstar_rel_l2_max")) < kExactError; };
+  const auto speed = [](const json* p) {
+    return p->at("relight_ms_opencl").is_number() ? num(p->at("relight_ms_opencl"))
+                                                  : num(p->at("relight_ms_cpp"));
+  };
+  std::vector<const json*> exact_ones;
+  for (const json* p : reached)
+    if (exact(p)) exact_ones.push_back(p);
   if (reached.empty()) {
     md += "No backend reached the target storage.\n\n";
+  } else if (exact_ones.size() >= 2) {
+    std::sort(exact_ones.begin(), exact_ones.end(),
+              [&](const json* a, const json* b) { return speed(a) < speed(b); });
+    std::string names;
+    for (const json* p : exact_ones)
+      names += (names.empty() ? "`" : ", `") + p->at("backend").get<std::string>() + "`";
+    md += fmt::format(
+        "**Exact at equal storage: {}** (L* error at float rounding, below {:.0e}); the fastest "
+        "relight among them is `{}` ({:.3f} ms against {:.3f} ms for `{}`, {:.2f}x).",
+        names, kExactError, exact_ones[0]->at("backend").get<std::string>(), speed(exact_ones[0]),
+        speed(exact_ones[1]), exact_ones[1]->at("backend").get<std::string>(),
+        speed(exact_ones[1]) / speed(exact_ones[0]));
+    const json* lossy = nullptr;
+    for (const json* p : reached)
+      if (!exact(p)) {
+        lossy = p;
+        break;
+      }
+    if (lossy)
+      md += fmt::format(" The best lossy backend, `{}`, has a mean L* error of {}.",
+                        lossy->at("backend").get<std::string>(),
+                        fmt_err(lossy->at("lstar_rel_l2_mean")));
+    md += "\n\n";
   } else if (reached.size() == 1) {
     md += fmt::format("Only `{}` reached the target storage.\n\n",
                       reached[0]->at("backend").get<std::string>());
@@ -151,12 +187,12 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
     const double e0 = num(reached[0]->at("lstar_rel_l2_mean"));
     const double e1 = num(reached[1]->at("lstar_rel_l2_mean"));
     md += fmt::format(
-        "**Lowest error at equal storage: `{}`** (mean relative L2 of L* {}), {} the runner-up "
+        "**Lowest error at equal storage: `{}`** (mean relative L2 of L* {}{}), {} the runner-up "
         "`{}` ({}).\n\n",
         reached[0]->at("backend").get<std::string>(), fmt_err(reached[0]->at("lstar_rel_l2_mean")),
-        e0 > 0 ? fmt::format("{:.3g}x lower than", e1 / e0)
-               : std::string("exact (to float rounding), against"),
-        reached[1]->at("backend").get<std::string>(), fmt_err(reached[1]->at("lstar_rel_l2_mean")));
+        exact(reached[0]) ? ", exact to float rounding" : "",
+        fmt::format("{:.3g}x lower than", e1 / e0), reached[1]->at("backend").get<std::string>(),
+        fmt_err(reached[1]->at("lstar_rel_l2_mean")));
   }
   std::string unreached;
   for (const auto& s : result.at("searches"))
@@ -344,6 +380,10 @@ std::string render_experiment_markdown(const json& result, const fs::path& folde
   md += "| | |\n|---|---|\n";
   md += fmt::format("| command | `{}` |\n", prov.value("command", std::string()));
   md += fmt::format("| provenance | {} |\n", prov.value("summary", std::string()));
+  md += fmt::format(
+      "| load average at start | {} (/proc/loadavg: 1, 5, 15 min; timings on a "
+      "loaded machine are inflated) |\n",
+      prov.value("load_average_at_start", std::string("unknown")));
   std::string envs;
   for (const auto& env : e.at("environments"))
     envs += (envs.empty() ? "" : ", ") + env.at("name").get<std::string>();

@@ -209,6 +209,9 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   const CacheMode mode = o.recompute ? CacheMode::kRefresh : CacheMode::kUse;
   BenchOptions bo{o.device, mode, o.show_progress_bars};
   const Provenance prov = collect_provenance(o.command_line, o.device);
+  // Other processes change every timing; the report records how busy the machine was.
+  std::string load;
+  if (std::ifstream in("/proc/loadavg"); in) std::getline(in, load);
   const auto& registry = CompressorRegistry::instance();
 
   std::vector<SceneVariant> variants;
@@ -350,6 +353,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   const json spec_json = to_json(spec);
   json prov_json = to_json(prov);
   prov_json["summary"] = prov.summary();
+  prov_json["load_average_at_start"] = load;
   json result = {{"experiment", spec_json},
                  {"provenance", prov_json},
                  {"paper", spec.paper},

@@ -18,7 +18,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   libxxhash-dev libstb-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib python3-numpy python3-scipy python3-xxhash python3-pip
+  python3 python3-matplotlib python3-numpy python3-scipy python3-skimage python3-xxhash python3-pip
 )
 # A backend folder that needs a Debian package of its own lists it in <folder>/packages.txt
 # (one name per line, '#' comments), so adding a backend edits nothing outside its folder.
