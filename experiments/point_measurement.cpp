@@ -24,7 +24,7 @@ namespace {
 using json = nlohmann::json;
 
 // Bump when a point's record changes meaning or layout: cached points are then recomputed.
-constexpr std::uint32_t kPointVersion = 2;
+constexpr std::uint32_t kPointVersion = 3;
 constexpr const char* kPointKind = "experiment-point";
 
 // The procedural sun of the "sun" environments: a sky of unit-ish radiance and a sun `ratio`
@@ -337,23 +337,25 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
           renderer.set_camera(orbit_camera(b.cameras.front(), 360.0 * i / spec.fps_frames));
           view_ms.push_back(renderer.render().times.total_ms());
         }
-        // Light changes with and without culling, interleaved so that load on the machine
-        // hits both alike; the relight stage alone shows what culling saves.
+        // Light changes with and without culling in alternating blocks (culled, full, culled,
+        // full), so that load on the machine hits both alike. Switching culling on or off
+        // changes what the device relights, so the first frame after a switch is not timed.
         std::vector<double> relight_culled, relight_unculled, light_unculled;
         renderer.set_camera(b.cameras.front());
         (void)renderer.render();
-        for (int i = 0; i < spec.fps_frames; ++i) {
-          const Cubemap& light = b.fps_lights[static_cast<std::size_t>(i)];
-          renderer.set_culling(true);
-          renderer.set_environment(light);
-          const FrameStats culled = renderer.render();
-          light_ms.push_back(culled.times.total_ms());
-          relight_culled.push_back(culled.times.relight_ms);
-          renderer.set_culling(false);
-          renderer.set_environment(light);
-          const FrameStats full = renderer.render();
-          light_unculled.push_back(full.times.total_ms());
-          relight_unculled.push_back(full.times.relight_ms);
+        const int block = std::max(1, spec.fps_frames / 2);
+        for (int pass = 0; pass < 4; ++pass) {
+          const bool cull = pass % 2 == 0;
+          renderer.set_culling(cull);
+          renderer.set_environment(b.fps_lights.back());
+          (void)renderer.render();
+          for (int i = 0; i < block; ++i) {
+            const auto k = static_cast<std::size_t>((pass / 2) * block + i) % b.fps_lights.size();
+            renderer.set_environment(b.fps_lights[k]);
+            const FrameStats f = renderer.render();
+            (cull ? light_ms : light_unculled).push_back(f.times.total_ms());
+            (cull ? relight_culled : relight_unculled).push_back(f.times.relight_ms);
+          }
         }
         // The image must not change: culled and unculled frames of the same light, bit for bit.
         renderer.set_culling(true);
