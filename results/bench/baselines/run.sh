@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The baselines on the bunny beside `uncompressed` and `bicluster` (defaults), in one run: ROUNDS rounds (default 3), each
-# running every configuration once (`prtlab compress ... --repeat 20`: the median of 20 timed
+# The baselines on the bunny beside `uncompressed` and `bicluster` (defaults), in one run: ROUNDS
+# rounds (default 3), each running every configuration once (`prtlab compress ... --repeat 20`: the median of 20 timed
 # relights per path), in a rotated order per round so that a slow period of the machine does not
 # fall on one configuration only. Writes bunny_<config>_r<round>.json here and prints the table
 # (summarize.py: medians over the rounds, ratios to uncompressed's median).
