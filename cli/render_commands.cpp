@@ -341,6 +341,11 @@ std::optional<std::pair<double, double>> paper_fps(const std::string& scene) {
   return std::pair{std::stod(row->fps.substr(0, slash)), std::stod(row->fps.substr(slash + 1))};
 }
 
+// How many light-change frames a view-change frame costs (0 when a light frame took no time).
+double view_to_light_ratio(const LoopResult& view, const LoopResult& light) {
+  return light.median_frame_ms > 0 ? view.median_frame_ms / light.median_frame_ms : 0.0;
+}
+
 std::string fmt_ms(double v) {
   return fmt::format("{:.2f}", v);
 }
@@ -411,6 +416,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       paper ? fmt::format("{:.1f} / {:.1f}", paper->first, paper->second) : std::string("—"));
   md += fmt::format("| frame ms | {} | {} | |\n", fmt_ms(view.median_frame_ms),
                     fmt_ms(light.median_frame_ms));
+  md += fmt::format("| view / light frame time | {:.2f} | | |\n", view_to_light_ratio(view, light));
   auto row = [&](const char* name, double FrameStageTimes::*f) {
     md +=
         fmt::format("| {} | {} | {} | |\n", name, fmt_ms(view.stages.*f), fmt_ms(light.stages.*f));
@@ -506,6 +512,7 @@ void run_fps(const FpsCli& o) {
   j["hit_pixels"] = r.gbuffer().hit_count();
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);
+  j["view_to_light_frame_ratio"] = view_to_light_ratio(view, light);
   j["paper"] = paper ? nlohmann::json{{"table", "Table I"},
                                       {"view_fps", paper->first},
                                       {"light_fps", paper->second},
