@@ -23,7 +23,7 @@
 // View cache (DeviceBtfShader, ShadingOptions::cache_view_vectors, on by default): the
 // view-interpolated BTF vector b(u(x), e(x), .) (M RGB values) of every hit pixel depends on
 // the view only. It is computed once per G-buffer (a "view-cache" kernel reading the 4 view
-// samples x 1 or 4 texels) and kept on the device; every shading pass then reads M RGB values
+// samples, 1 for a view-independent BTF, x 1 or 4 texels) and kept on the device; every shading pass then reads M RGB values
 // of b per pixel instead of 4 (nearest) or 16 (bilinear) times as many: a light change only
 // does the dot products. Without it, one kernel interpolates and dots in one pass.
 // docs/rendering.md "BTF shading" has the measurements.
