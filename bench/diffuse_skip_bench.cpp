@@ -6,13 +6,17 @@
 // comes from one run under the same load:
 //
 //   diffuse_skip/cpp/<filter>            shade_frame_reference (C++, TBB)
-//   diffuse_skip/<pass>/<filter>         DeviceBtfShader: single_pass (btf_shade_single),
-//                                        view_cache (btf_view_cache: what a view change adds),
-//                                        cached_shade (btf_shade_cached: a light change)
+//   diffuse_skip/single_pass/<filter>    DeviceBtfShader without the view cache (btf_shade_single)
+//   diffuse_skip/view_change/<filter>    DeviceBtfShader with ShadingOptions::cache_view_vectors:
+//                                        shade() after a new G-buffer (btf_view_cache +
+//                                        btf_shade_cached; the skip's nearest pass runs the single
+//                                        pass instead, DeviceBtfShader::uses_view_cache)
+//   diffuse_skip/light_change/<filter>   the same shaders, shade() again (btf_shade_cached, or the
+//                                        single pass where the cache is not used)
 //
 // Counters: skip_ms and interp_ms (medians), ratio = interp_ms / skip_ms; for the device passes
-// also the bytes each pass moves (DeviceBtfShader::bytes_per_pass) and the material's device
-// memory, for both. The iteration time reported is the skip's.
+// also the bytes each pass moves (DeviceBtfShader::bytes_per_pass), the shader's device memory
+// and whether each uses the view cache. The iteration time reported is the skip's.
 //
 //   POCL_MAX_PTHREAD_COUNT=2 POCL_CPU_MAX_CU_COUNT=2 POCL_AFFINITY=1
 //     build/<dir>/bench/diffuse_skip_bench --benchmark_repetitions=3
@@ -132,29 +136,19 @@ void BM_cpp(benchmark::State& state, prt::TexelFilter filter) {
   report(state, skip_ms, interp_ms);
 }
 
-enum class Pass { kSingle, kViewCache, kCachedShade };
+enum class Pass { kSingle, kViewChange, kLightChange };
 
-// One timed pass of `shader` (the view cache rebuilt first for kViewCache: host work, untimed).
+// One timed frame's shading of `shader` (a new G-buffer first for kViewChange: host work,
+// untimed).
 double pass_ms(prt::DeviceBtfShader& shader, const prt::GBuffer& g, Pass pass) {
-  if (pass == Pass::kViewCache) {
-    shader.set_gbuffer(g);
-    shader.shade();
-    return shader.last_view_cache_ms();
-  }
+  if (pass == Pass::kViewChange) shader.set_gbuffer(g);
   return shader.shade();
 }
 
 std::uint64_t pass_bytes(const prt::DeviceBtfShader& shader, Pass pass) {
   const auto b = shader.bytes_per_pass();
-  switch (pass) {
-    case Pass::kSingle:
-      return b.single_pass;
-    case Pass::kViewCache:
-      return b.view_cache;
-    case Pass::kCachedShade:
-      return b.cached_shade;
-  }
-  return 0;
+  if (!shader.uses_view_cache()) return b.single_pass;
+  return pass == Pass::kViewChange ? b.view_cache + b.cached_shade : b.cached_shade;
 }
 
 void BM_device(benchmark::State& state, Pass pass, prt::TexelFilter filter) {
@@ -184,6 +178,8 @@ void BM_device(benchmark::State& state, Pass pass, prt::TexelFilter filter) {
   state.counters["skip_device_MB"] = static_cast<double>(skip.device_bytes()) * 1e-6;
   state.counters["interp_device_MB"] = static_cast<double>(interp.device_bytes()) * 1e-6;
   state.counters["hit_pixels"] = static_cast<double>(skip.hit_pixels());
+  state.counters["skip_cached"] = skip.uses_view_cache() ? 1 : 0;
+  state.counters["interp_cached"] = interp.uses_view_cache() ? 1 : 0;
 }
 
 void register_benchmarks() {
@@ -193,8 +189,8 @@ void register_benchmarks() {
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
     for (const auto& [name, pass] :
-         {std::pair{"single_pass", Pass::kSingle}, std::pair{"view_cache", Pass::kViewCache},
-          std::pair{"cached_shade", Pass::kCachedShade}}) {
+         {std::pair{"single_pass", Pass::kSingle}, std::pair{"view_change", Pass::kViewChange},
+          std::pair{"light_change", Pass::kLightChange}}) {
       benchmark::RegisterBenchmark(
           (std::string("diffuse_skip/") + name + "/" + filter_name(filter)).c_str(),
           [pass = pass, filter](benchmark::State& s) { BM_device(s, pass, filter); })

@@ -341,6 +341,11 @@ std::optional<std::pair<double, double>> paper_fps(const std::string& scene) {
   return std::pair{std::stod(row->fps.substr(0, slash)), std::stod(row->fps.substr(slash + 1))};
 }
 
+// Whether the frames ran the cached shading kernels (DeviceBtfShader::uses_view_cache).
+bool view_cache_used(const FrameRenderer& r) {
+  return r.device_shader() && r.device_shader()->uses_view_cache();
+}
+
 // How many light-change frames a view-change frame costs (0 when a light frame took no time).
 double view_to_light_ratio(const LoopResult& view, const LoopResult& light) {
   return light.median_frame_ms > 0 ? view.median_frame_ms / light.median_frame_ms : 0.0;
@@ -399,7 +404,9 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       "view cache {} |\n",
       p.camera.width, p.camera.height, scene_view(p.desc, o.view).name, hits,
       100.0 * hits / (static_cast<double>(p.camera.width) * p.camera.height), o.filter,
-      o.no_view_cache ? "off" : "on");
+      o.no_view_cache      ? "off"
+      : view_cache_used(r) ? "on"
+                           : "on but unused (no part's material gains from it)");
   md += fmt::format(
       "| frames | {} view changes (the camera orbits the target about +y, {:.1f} deg apart), {} "
       "light changes (`{}` rotated about +y, {:.1f} deg apart, cubemaps prepared before timing) "
@@ -509,6 +516,7 @@ void run_fps(const FpsCli& o) {
   j["filter"] = o.filter;
   j["btf_resolution"] = o.btf_resolution;
   j["view_cache"] = !o.no_view_cache;
+  j["view_cache_used"] = view_cache_used(r);
   j["hit_pixels"] = r.gbuffer().hit_count();
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);

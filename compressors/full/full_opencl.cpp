@@ -70,6 +70,9 @@ class FullDeviceMaterial final : public DeviceMaterial {
     set_args_from(kernel, first, data_, part_offset_, part_info_);
   }
   std::uint64_t device_bytes() const override { return bytes_; }
+  bool view_cache_useful(std::size_t part, TexelFilter filter) const override {
+    return views_read_.at(part) > 1 || filter == TexelFilter::kBilinear;
+  }
   std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const override {
     const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
     return texels * static_cast<std::uint64_t>(views_read_.at(part)) *

@@ -349,6 +349,50 @@ TEST(BtfShading, DiffuseSkipMatchesInterpolationWithinTheDerivedBoundOpenCl) {
   }
 }
 
+// When every part is a view-independent BTF looked up at the nearest texel, the cached vector
+// would be the stored one: the shader runs the single-pass kernel instead (no cache kernel, no
+// cache memory), with the single-pass image bit for bit. With bilinear texels, with a
+// view-dependent part, or without the skip, the cache is used.
+TEST(BtfShading, ViewCacheIsSkippedWhenNoPartGainsFromIt) {
+  PRT_REQUIRE_OPENCL();
+  const auto& s = tiny();
+  const auto lambert = s.lambert_btfs[0];
+  const ShadingMaterials all_lambert = full_materials({lambert, lambert});
+  const auto interpolated = std::make_shared<const Btf>(without_view_skip(*lambert));
+  const ShadingMaterials all_interpolated = full_materials({interpolated, interpolated});
+  auto uses_cache = [&](const ShadingMaterials& m, TexelFilter filter) {
+    ShadingOptions o;
+    o.filter = filter;
+    return DeviceBtfShader(*context(), s.scene.mesh, m, &s.background, o).uses_view_cache();
+  };
+  EXPECT_FALSE(uses_cache(all_lambert, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(all_lambert, TexelFilter::kBilinear));
+  EXPECT_TRUE(uses_cache(s.with_lambert, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(all_interpolated, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(s.materials, TexelFilter::kNearest));
+
+  ShadingOptions cached, single;
+  single.cache_view_vectors = false;
+  DeviceBtfShader a(*context(), s.scene.mesh, all_lambert, &s.background, cached);
+  DeviceBtfShader b(*context(), s.scene.mesh, all_lambert, &s.background, single);
+  EXPECT_FALSE(b.uses_view_cache());
+  for (const GBuffer* g : {&s.front, &s.top}) {
+    for (auto* sh : {&a, &b}) {
+      sh->set_gbuffer(*g);
+      sh->set_radiance(s.radiance);
+      sh->shade();
+    }
+    EXPECT_EQ(a.last_view_cache_ms(), 0.0);
+    const RgbImage ia = a.read_image(), ib = b.read_image();
+    EXPECT_EQ(ia.pixels, ib.pixels);
+    EXPECT_EQ(a.device_bytes(), b.device_bytes());
+    ShadingOptions o;
+    const RgbImage ref =
+        shade_frame_reference(*g, s.scene.mesh, all_lambert, s.radiance, &s.background, o);
+    EXPECT_LE(max_error_vs_image_max(ia, ref), 1e-5);
+  }
+}
+
 TEST(BtfShading, RejectsMismatchedMaterialsAndRadiance) {
   const auto& s = tiny();
   ShadingMaterials one;
