@@ -66,8 +66,8 @@ TEST(BtfViewSkip, DetectionIsExact) {
   // kNever keeps the interpolation (and the values).
   const Btf never = without_view_skip(b);
   EXPECT_FALSE(never.view_independent());
-  EXPECT_TRUE(std::equal(never.data().begin(), never.data().end(), b.data().begin(),
-                         b.data().end()));
+  EXPECT_TRUE(
+      std::equal(never.data().begin(), never.data().end(), b.data().begin(), b.data().end()));
 }
 
 TEST(BtfViewSkip, GeneratedLambertIsDetectedAndMesoStructureIsNot) {
