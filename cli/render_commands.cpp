@@ -346,6 +346,16 @@ std::optional<std::pair<double, double>> paper_fps(const std::string& scene) {
   return std::pair{std::stod(row->fps.substr(0, slash)), std::stod(row->fps.substr(slash + 1))};
 }
 
+// Whether the frames ran the cached shading kernels (DeviceBtfShader::uses_view_cache).
+bool view_cache_used(const FrameRenderer& r) {
+  return r.device_shader() && r.device_shader()->uses_view_cache();
+}
+
+// How many light-change frames a view-change frame costs (0 when a light frame took no time).
+double view_to_light_ratio(const LoopResult& view, const LoopResult& light) {
+  return light.median_frame_ms > 0 ? view.median_frame_ms / light.median_frame_ms : 0.0;
+}
+
 std::string fmt_ms(double v) {
   return fmt::format("{:.2f}", v);
 }
@@ -399,7 +409,9 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       "view cache {} |\n",
       p.camera.width, p.camera.height, scene_view(p.desc, o.view).name, hits,
       100.0 * hits / (static_cast<double>(p.camera.width) * p.camera.height), o.filter,
-      o.no_view_cache ? "off" : "on");
+      o.no_view_cache      ? "off"
+      : view_cache_used(r) ? "on"
+                           : "on but unused (no part's material gains from it)");
   md += fmt::format(
       "| frames | {} view changes (the camera orbits the target about +y, {:.1f} deg apart), {} "
       "light changes (`{}` rotated about +y, {:.1f} deg apart, cubemaps prepared before timing) "
@@ -416,6 +428,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       paper ? fmt::format("{:.1f} / {:.1f}", paper->first, paper->second) : std::string("—"));
   md += fmt::format("| frame ms | {} | {} | |\n", fmt_ms(view.median_frame_ms),
                     fmt_ms(light.median_frame_ms));
+  md += fmt::format("| view / light frame time | {:.2f} | | |\n", view_to_light_ratio(view, light));
   auto row = [&](const char* name, double FrameStageTimes::*f) {
     md +=
         fmt::format("| {} | {} | {} | |\n", name, fmt_ms(view.stages.*f), fmt_ms(light.stages.*f));
@@ -512,6 +525,7 @@ void run_fps(const FpsCli& o) {
   j["filter"] = o.filter;
   j["btf_resolution"] = o.btf_resolution;
   j["view_cache"] = !o.no_view_cache;
+  j["view_cache_used"] = view_cache_used(r);
   j["hit_pixels"] = r.gbuffer().hit_count();
   // Of the default view (cameras[0], where the light loop runs).
   j["culling"] = {{"enabled", r.culling()},
@@ -520,6 +534,7 @@ void run_fps(const FpsCli& o) {
                   {"total_vertices", r.mesh().positions.size()}};
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);
+  j["view_to_light_frame_ratio"] = view_to_light_ratio(view, light);
   j["paper"] = paper ? nlohmann::json{{"table", "Table I"},
                                       {"view_fps", paper->first},
                                       {"light_fps", paper->second},

@@ -49,9 +49,9 @@ class FullMaterial final : public CompressedMaterial {
   std::shared_ptr<const Btf> btf_;
 };
 
-/// Every part's BTF in one device buffer (each distinct BTF once) with per-part offsets and
-/// (U, view_side, view_independent) tables, evaluated by full_material.cl. The context must
-/// outlive the result.
+/// Every part's BTF in one device buffer (each distinct BTF once; a view-independent one with its
+/// view 0 only, U^2 x M x 3 floats) with per-part offsets and (U, view_side, view_independent)
+/// tables, evaluated by full_material.cl. The context must outlive the result.
 std::unique_ptr<DeviceMaterial> upload_full(ClContext& context,
                                             std::span<const FullMaterial* const> parts);
 

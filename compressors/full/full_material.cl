@@ -5,7 +5,8 @@
 //
 // Data (packed float RGB, no padding):
 //   full_btf          every distinct part BTF, rgb[((texel * V + view) * M + light) * 3 + c]
-//                     from the part's offset (floats)
+//                     from the part's offset (floats); a view-independent BTF is stored with
+//                     V = 1 (view 0 only)
 //   full_part_offset  per part, the offset of its BTF in full_btf
 //   full_part_info    per part (U, view_side, view_independent, 0)
 
@@ -42,7 +43,7 @@ void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MA
   } else {
     prt_view_samples(side, view, views, view_w);
   }
-  const ulong vcount = (ulong)side * (ulong)side;
+  const ulong vcount = info.z ? 1 : (ulong)side * (ulong)side;
   int n = 0;
   for (int t = 0; t < texel_count; ++t) {
     for (int k = 0; k < view_count; ++k) {

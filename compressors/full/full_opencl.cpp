@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <map>
 #include <vector>
 
@@ -7,6 +8,30 @@
 
 namespace prt::full {
 namespace {
+
+// The floats of `b` on the device: a view-independent BTF keeps only view 0 of each texel (every
+// other view holds the same values, and the kernel reads none of them).
+std::uint64_t device_values(const Btf& b) {
+  return b.view_independent() ? static_cast<std::uint64_t>(b.texel_count()) * b.light_count() * 3
+                              : b.value_count();
+}
+
+void write_btf_values(ClContext& context, const cl::Buffer& data, const Btf& b,
+                      std::uint64_t offset) {
+  if (!b.view_independent()) {
+    write_buffer(context, data, b.data().data(), b.bytes(), "full material BTFs",
+                 offset * sizeof(float));
+    return;
+  }
+  const std::size_t vector = static_cast<std::size_t>(b.light_count()) * 3;
+  std::vector<float> one_view(static_cast<std::size_t>(device_values(b)));
+  for (int t = 0; t < b.texel_count(); ++t) {
+    const auto v = b.light_vector(t, 0);
+    std::copy(v.begin(), v.end(), one_view.begin() + static_cast<std::ptrdiff_t>(t * vector));
+  }
+  write_buffer(context, data, one_view.data(), one_view.size() * sizeof(float),
+               "full material BTFs", offset * sizeof(float));
+}
 
 class FullDeviceMaterial final : public DeviceMaterial {
  public:
@@ -19,13 +44,11 @@ class FullDeviceMaterial final : public DeviceMaterial {
       const Btf* b = &p->btf();
       if (offset_of.emplace(b, total).second) {
         order.push_back(b);
-        total += b->value_count();
+        total += device_values(*b);
       }
     }
     data_ = make_buffer(context, total * sizeof(float), CL_MEM_READ_ONLY, "full material BTFs");
-    for (const Btf* b : order)
-      write_buffer(context, data_, b->data().data(), b->bytes(), "full material BTFs",
-                   offset_of.at(b) * sizeof(float));
+    for (const Btf* b : order) write_btf_values(context, data_, *b, offset_of.at(b));
     std::vector<cl_ulong> offsets;
     std::vector<cl_int4> info;
     for (const FullMaterial* p : parts) {
@@ -47,6 +70,9 @@ class FullDeviceMaterial final : public DeviceMaterial {
     set_args_from(kernel, first, data_, part_offset_, part_info_);
   }
   std::uint64_t device_bytes() const override { return bytes_; }
+  bool view_cache_useful(std::size_t part, TexelFilter filter) const override {
+    return views_read_.at(part) > 1 || filter == TexelFilter::kBilinear;
+  }
   std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const override {
     const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
     return texels * static_cast<std::uint64_t>(views_read_.at(part)) *

@@ -140,8 +140,22 @@ TEST_F(RenderCli, FpsRelightsOnlyOnLightChangesAndWritesReports) {
   EXPECT_EQ(j["view_change"]["gbuffer_traces"], 3);
   EXPECT_EQ(j["light_change"]["relights"], 3);
   EXPECT_EQ(j["light_change"]["gbuffer_traces"], 0);
-  EXPECT_GT(j["view_change"]["fps"].get<double>(), 0.0);
-  EXPECT_GT(j["light_change"]["fps"].get<double>(), 0.0);
+  // Frame times: each loop's median, its fps, and their ratio; a view-change frame runs no
+  // light stage and a light-change frame no G-buffer stage.
+  const double view_ms = j["view_change"]["median_frame_ms"].get<double>();
+  const double light_ms = j["light_change"]["median_frame_ms"].get<double>();
+  ASSERT_GT(view_ms, 0.0);
+  ASSERT_GT(light_ms, 0.0);
+  EXPECT_DOUBLE_EQ(j["view_change"]["fps"].get<double>(), 1000.0 / view_ms);
+  EXPECT_DOUBLE_EQ(j["light_change"]["fps"].get<double>(), 1000.0 / light_ms);
+  EXPECT_DOUBLE_EQ(j["view_to_light_frame_ratio"].get<double>(), view_ms / light_ms);
+  const auto& view_stages = j["view_change"]["stages_median"];
+  const auto& light_stages = j["light_change"]["stages_median"];
+  EXPECT_EQ(view_stages["project_ms"].get<double>(), 0.0);
+  EXPECT_EQ(view_stages["relight_ms"].get<double>(), 0.0);
+  EXPECT_GT(view_stages["gbuffer_ms"].get<double>(), 0.0);
+  EXPECT_EQ(light_stages["gbuffer_ms"].get<double>(), 0.0);
+  EXPECT_GT(light_stages["relight_ms"].get<double>(), 0.0);
   EXPECT_TRUE(j["paper"].is_null()) << "the paper has no tiny scene";
   EXPECT_TRUE(j["provenance"].contains("git"));
   EXPECT_TRUE(fs::exists(md));

@@ -1,7 +1,9 @@
 // BTF shading: the OpenCL kernels against the C++ reference (nearest and bilinear texels, with
 // and without the view cache, a view-independent BTF, background on and off, light and view
-// changes), and the flat Lambertian plane under a constant environment, which must render
-// a * Le (docs/rendering.md "BTF shading" derives the tolerance).
+// changes); the diffuse skip against interpolating the equal view samples (within the bound of
+// docs/btf.md "Diffuse BTFs", bit-identical elsewhere, fewer bytes); and the flat Lambertian
+// plane under a constant environment, which must render a * Le (docs/rendering.md "BTF
+// shading" derives the tolerance).
 #include "prtlab/render/btf_shading.h"
 
 #include <gtest/gtest.h>
@@ -13,11 +15,11 @@
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
 #include "prtlab/compress/material_registry.h"
-#include "prtlab/opencl/cl_context.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/transfer/exact_relight.h"
 #include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/geometry/scene.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
@@ -59,6 +61,7 @@ struct TinyScene {
   std::vector<std::shared_ptr<const Btf>> btfs, lambert_btfs;
   ShadingMaterials materials;
   ShadingMaterials with_lambert;  // the plane's BTF replaced by the view-independent lambert
+  ShadingMaterials with_lambert_interpolated;  // the same, shaded without the view skip
   GBuffer front, top;
   LocalRadiance radiance, radiance2;
   Cubemap background = SunSky{}.to_cubemap(8, 2);
@@ -73,6 +76,9 @@ struct TinyScene {
         std::make_shared<const Btf>(generate_btf(make_btf_material("lambert"), small_btf(side)));
     materials = full_materials(btfs);
     with_lambert = full_materials(lambert_btfs);
+    auto interpolated = lambert_btfs;
+    interpolated[0] = std::make_shared<const Btf>(without_view_skip(*lambert_btfs[0]));
+    with_lambert_interpolated = full_materials(interpolated);
     CameraOverrides size;
     size.width = 96;
     size.height = 72;
@@ -246,6 +252,144 @@ TEST(BtfShading, OddLightGridUsesTheScalarTail) {
           << (filter == TexelFilter::kNearest ? "nearest" : "bilinear")
           << (cache ? ", view cache" : ", single pass");
     }
+  }
+}
+
+// ---- diffuse skip ------------------------------------------------------------------------------
+//
+// The plane's lambert BTF shaded with the skip (one view, weight 1) and without it (4 equal view
+// samples interpolated): misses and the sphere's view-dependent pixels are bit-identical, the
+// plane's within the bounds of docs/btf.md "Diffuse BTFs" (L* and the BTF are non-negative, so
+// the bound's sum of |terms| is the pixel's value): C++ 7 u nearest, 24 u bilinear; OpenCL
+// (7 or 24) u + 2 (M / 4 + 3) u, the interpolation before the dot product plus the rounding of
+// two dot products of M / 4 float4 steps and the lane sum (M = 16 here: 21 u and 38 u). The
+// tests add 1 u: they scale by the computed pixel, not the exact sum.
+struct SkipComparison {
+  double worst_rel = 0;          // over the plane's pixels and channels, in units of its value
+  std::size_t plane_pixels = 0;  // pixels of the lambert part
+  std::size_t unequal_elsewhere = 0;
+};
+
+SkipComparison compare_skip(const GBuffer& g, const RgbImage& skipped,
+                            const RgbImage& interpolated) {
+  SkipComparison r;
+  for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+    if (g.part[i] != 0) {
+      r.unequal_elsewhere += skipped.pixels[i] != interpolated.pixels[i];
+      continue;
+    }
+    ++r.plane_pixels;
+    for (int c = 0; c < 3; ++c) {
+      const double a = skipped.pixels[i][c], b = interpolated.pixels[i][c];
+      if (a != b) r.worst_rel = std::max(r.worst_rel, std::abs(a - b) / std::abs(a));
+    }
+  }
+  return r;
+}
+
+constexpr double kUlp = 0x1p-24;
+
+TEST(BtfShading, DiffuseSkipMatchesInterpolationWithinTheDerivedBoundCpp) {
+  const auto& s = tiny();
+  ASSERT_TRUE(s.lambert_btfs[0]->view_independent());
+  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
+    ShadingOptions o;
+    o.filter = filter;
+    for (const GBuffer* g : {&s.front, &s.top}) {
+      const RgbImage a =
+          shade_frame_reference(*g, s.scene.mesh, s.with_lambert, s.radiance, &s.background, o);
+      const RgbImage b = shade_frame_reference(*g, s.scene.mesh, s.with_lambert_interpolated,
+                                               s.radiance, &s.background, o);
+      const SkipComparison r = compare_skip(*g, a, b);
+      const double bound = (filter == TexelFilter::kNearest ? 8 : 25) * kUlp;
+      EXPECT_GT(r.plane_pixels, 100u);
+      EXPECT_EQ(r.unequal_elsewhere, 0u);
+      EXPECT_LE(r.worst_rel, bound) << "worst " << r.worst_rel / kUlp << " u";
+    }
+  }
+}
+
+TEST(BtfShading, DiffuseSkipMatchesInterpolationWithinTheDerivedBoundOpenCl) {
+  PRT_REQUIRE_OPENCL();
+  const auto& s = tiny();
+  const int m = s.radiance.dim;
+  const std::uint64_t vector = static_cast<std::uint64_t>(m) * 12;
+  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
+    for (const bool cache : {true, false}) {
+      SCOPED_TRACE(::testing::Message()
+                   << (filter == TexelFilter::kNearest ? "nearest" : "bilinear")
+                   << (cache ? ", view cache" : ", single pass"));
+      ShadingOptions o;
+      o.filter = filter;
+      o.cache_view_vectors = cache;
+      DeviceBtfShader skip(*context(), s.scene.mesh, s.with_lambert, &s.background, o);
+      DeviceBtfShader interp(*context(), s.scene.mesh, s.with_lambert_interpolated, &s.background,
+                             o);
+      for (auto* sh : {&skip, &interp}) {
+        sh->set_gbuffer(s.front);
+        sh->set_radiance(s.radiance);
+        sh->shade();
+      }
+      const SkipComparison r = compare_skip(s.front, skip.read_image(), interp.read_image());
+      const double bound = ((filter == TexelFilter::kNearest ? 8 : 25) + 2 * (m / 4 + 3)) * kUlp;
+      EXPECT_GT(r.plane_pixels, 100u);
+      EXPECT_EQ(r.unequal_elsewhere, 0u);
+      EXPECT_LE(r.worst_rel, bound) << "worst " << r.worst_rel / kUlp << " u";
+
+      // The skip reads one view vector per texel of a plane pixel instead of 4, and the plane's
+      // BTF is on the device with its one view.
+      const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
+      EXPECT_EQ(interp.bytes_read_per_frame() - skip.bytes_read_per_frame(),
+                r.plane_pixels * 3 * texels * vector);
+      const Btf& plane = *s.lambert_btfs[0];
+      EXPECT_EQ(
+          interp.device_bytes() - skip.device_bytes(),
+          static_cast<std::uint64_t>(plane.texel_count()) * (plane.view_count() - 1) * vector);
+    }
+  }
+}
+
+// When every part is a view-independent BTF looked up at the nearest texel, the cached vector
+// would be the stored one: the shader runs the single-pass kernel instead (no cache kernel, no
+// cache memory), with the single-pass image bit for bit. With bilinear texels, with a
+// view-dependent part, or without the skip, the cache is used.
+TEST(BtfShading, ViewCacheIsSkippedWhenNoPartGainsFromIt) {
+  PRT_REQUIRE_OPENCL();
+  const auto& s = tiny();
+  const auto lambert = s.lambert_btfs[0];
+  const ShadingMaterials all_lambert = full_materials({lambert, lambert});
+  const auto interpolated = std::make_shared<const Btf>(without_view_skip(*lambert));
+  const ShadingMaterials all_interpolated = full_materials({interpolated, interpolated});
+  auto uses_cache = [&](const ShadingMaterials& m, TexelFilter filter) {
+    ShadingOptions o;
+    o.filter = filter;
+    return DeviceBtfShader(*context(), s.scene.mesh, m, &s.background, o).uses_view_cache();
+  };
+  EXPECT_FALSE(uses_cache(all_lambert, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(all_lambert, TexelFilter::kBilinear));
+  EXPECT_TRUE(uses_cache(s.with_lambert, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(all_interpolated, TexelFilter::kNearest));
+  EXPECT_TRUE(uses_cache(s.materials, TexelFilter::kNearest));
+
+  ShadingOptions cached, single;
+  single.cache_view_vectors = false;
+  DeviceBtfShader a(*context(), s.scene.mesh, all_lambert, &s.background, cached);
+  DeviceBtfShader b(*context(), s.scene.mesh, all_lambert, &s.background, single);
+  EXPECT_FALSE(b.uses_view_cache());
+  for (const GBuffer* g : {&s.front, &s.top}) {
+    for (auto* sh : {&a, &b}) {
+      sh->set_gbuffer(*g);
+      sh->set_radiance(s.radiance);
+      sh->shade();
+    }
+    EXPECT_EQ(a.last_view_cache_ms(), 0.0);
+    const RgbImage ia = a.read_image(), ib = b.read_image();
+    EXPECT_EQ(ia.pixels, ib.pixels);
+    EXPECT_EQ(a.device_bytes(), b.device_bytes());
+    ShadingOptions o;
+    const RgbImage ref =
+        shade_frame_reference(*g, s.scene.mesh, all_lambert, s.radiance, &s.background, o);
+    EXPECT_LE(max_error_vs_image_max(ia, ref), 1e-5);
   }
 }
 

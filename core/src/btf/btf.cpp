@@ -120,7 +120,7 @@ BtfViewSamples btf_view_samples(int view_side, Vec3 view_local) {
 // --- Btf ------------------------------------------------------------------------------------
 
 Btf::Btf(std::string material, int resolution, int view_side, int light_side,
-         std::vector<float> rgb, nlohmann::json parameters)
+         std::vector<float> rgb, nlohmann::json parameters, ViewSkip skip)
     : material_(std::move(material)),
       resolution_(resolution),
       view_side_(view_side),
@@ -139,9 +139,10 @@ Btf::Btf(std::string material, int resolution, int view_side, int light_side,
     throw ParameterError(fmt::format("BTF '{}': {} values given, {} x {} x {} x 3 = {} expected",
                                      material_, rgb_.size(), texel_count(), view_count(),
                                      light_count(), expected));
-  // Bitwise comparison: a Lambertian BTF computes the same float for every view.
+  // Bitwise comparison: a Lambertian BTF computes the same float for every view, and anything
+  // looser would let the skip change a view-dependent image.
   const std::size_t block = static_cast<std::size_t>(light_count()) * 3;
-  view_independent_ = true;
+  view_independent_ = skip == ViewSkip::kDetect;
   for (int t = 0; t < texel_count() && view_independent_; ++t) {
     const float* first = rgb_.data() + offset(t, 0, 0);
     for (int v = 1; v < view_count(); ++v) {
@@ -187,14 +188,23 @@ BtfTexelSamples Btf::texel_samples(Vec2 uv, TexelFilter filter) const {
   return btf_texel_samples(resolution_, uv, filter);
 }
 
+BtfViewSamples Btf::view_samples(Vec3 view_local) const {
+  if (!view_independent_) return btf_view_samples(view_side_, view_local);
+  BtfViewSamples s;
+  s.weight = {1.0f, 0.0f, 0.0f, 0.0f};
+  return s;
+}
+
 Rgb Btf::eval(Vec2 uv, Vec3 view_local, int light, TexelFilter filter) const {
   PRT_CHECK(light >= 0 && light < light_count(), "light {} out of range", light);
   const BtfTexelSamples ts = texel_samples(uv, filter);
-  const BtfViewSamples vs = btf_view_samples(view_side_, view_local);
+  const BtfViewSamples vs = view_samples(view_local);
   Rgb sum(0.0f);
   for (int t = 0; t < ts.count; ++t)
-    for (int k = 0; k < 4; ++k)
-      sum += (ts.weight[t] * vs.weight[k]) * value(ts.texel[t], vs.view[k], light);
+    for (int k = 0; k < 4; ++k) {
+      const float w = ts.weight[t] * vs.weight[k];
+      if (w != 0.0f) sum += w * value(ts.texel[t], vs.view[k], light);
+    }
   return sum;
 }
 
@@ -202,7 +212,7 @@ void Btf::eval_lights(Vec2 uv, Vec3 view_local, std::span<Rgb> out, TexelFilter 
   PRT_CHECK(out.size() == static_cast<std::size_t>(light_count()), "need {} outputs, got {}",
             light_count(), out.size());
   const BtfTexelSamples ts = texel_samples(uv, filter);
-  const BtfViewSamples vs = btf_view_samples(view_side_, view_local);
+  const BtfViewSamples vs = view_samples(view_local);
   std::fill(out.begin(), out.end(), Rgb(0.0f));
   for (int t = 0; t < ts.count; ++t) {
     for (int k = 0; k < 4; ++k) {
@@ -220,7 +230,7 @@ Rgb Btf::shade(Vec2 uv, Vec3 view_local, std::span<const Rgb> local_radiance,
   PRT_CHECK(local_radiance.size() == static_cast<std::size_t>(light_count()),
             "need {} local radiance values, got {}", light_count(), local_radiance.size());
   const BtfTexelSamples ts = texel_samples(uv, filter);
-  const BtfViewSamples vs = btf_view_samples(view_side_, view_local);
+  const BtfViewSamples vs = view_samples(view_local);
   Rgb sum(0.0f);
   for (int t = 0; t < ts.count; ++t) {
     for (int k = 0; k < 4; ++k) {
@@ -282,6 +292,12 @@ BtfStats btf_stats(const Btf& btf) {
   s.albedo_mean = Rgb(amean);
   s.albedo_max = Rgb(amax);
   return s;
+}
+
+Btf without_view_skip(const Btf& btf) {
+  return Btf(btf.material(), btf.resolution(), btf.view_side(), btf.light_side(),
+             std::vector<float>(btf.data().begin(), btf.data().end()), btf.parameters(),
+             ViewSkip::kNever);
 }
 
 // --- archive --------------------------------------------------------------------------------

@@ -125,6 +125,7 @@ struct DeviceBtfShader::Impl {
   // The buffer the kernels read L* from: `radiance` (uploaded by set_radiance) or a
   // relighter's output buffer (set_radiance_buffer).
   cl::Buffer radiance_source;
+  bool use_cache = false;  // options.cache_view_vectors, unless no part's material gains from it
   std::size_t pixel_capacity = 0, slot_capacity = 0, cache_capacity = 0;
   std::uint64_t static_bytes = 0;
 
@@ -174,8 +175,11 @@ DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
   s.cached = make_kernel(program, "btf_shade_cached");
   s.material->set_args(s.single, kSingleMaterialArg);
   s.material->set_args(s.view_cache, kViewCacheMaterialArg);
-  for (std::size_t p = 0; p < s.parts; ++p)
+  for (std::size_t p = 0; p < s.parts; ++p) {
     s.part_material_bytes.push_back(s.material->bytes_per_hit(p, options.filter));
+    s.use_cache = s.use_cache || s.material->view_cache_useful(p, options.filter);
+  }
+  s.use_cache = s.use_cache && options.cache_view_vectors;
 
   s.indices = upload(context, std::span<const std::uint32_t>(mesh.indices), "shading triangles");
   s.static_bytes = mesh.indices.size() * 4 + s.material->device_bytes();
@@ -277,7 +281,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
     write_buffer(s.ctx, s.slot_geom, geom.data(), s.slots * sizeof(cl_float4), "shading slots");
     write_buffer(s.ctx, s.slot_view, view.data(), s.slots * sizeof(cl_float4), "shading slots");
   }
-  if (s.options.cache_view_vectors && s.slots > s.cache_capacity) {
+  if (s.use_cache && s.slots > s.cache_capacity) {
     s.cache = cl::Buffer();  // release the old one before allocating the larger one
     s.cache = make_buffer(s.ctx, grown * s.m * sizeof(Rgb), CL_MEM_READ_WRITE,
                           "view-interpolated BTF cache");
@@ -315,7 +319,7 @@ double DeviceBtfShader::shade() {
   s.last_cache_ms = 0.0;
   if (s.pixels == 0) return 0.0;  // OpenCL forbids an empty launch
   const auto pixels = static_cast<cl_uint>(s.pixels);
-  if (!s.options.cache_view_vectors) {
+  if (!s.use_cache) {
     set_args(s.single, pixels, s.code, s.slot_ids, s.slot_geom, s.slot_view, s.indices,
              s.radiance_source, s.background, s.image);
     cl::Event ev =
@@ -335,6 +339,10 @@ double DeviceBtfShader::shade() {
   cl::Event ev =
       launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.pixels, kWorkGroup));
   return s.last_cache_ms + event_ms(s.ctx, ev, "btf_shade_cached");
+}
+
+bool DeviceBtfShader::uses_view_cache() const {
+  return impl_->use_cache;
 }
 
 double DeviceBtfShader::last_view_cache_ms() const {

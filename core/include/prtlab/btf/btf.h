@@ -34,8 +34,8 @@
 #include <string>
 #include <vector>
 
-#include "prtlab/storage/archive.h"
 #include "prtlab/base/types.h"
+#include "prtlab/storage/archive.h"
 
 namespace prt {
 
@@ -76,6 +76,12 @@ BtfViewSamples btf_view_samples(int view_side, Vec3 view_local);
 
 enum class TexelFilter { kNearest, kBilinear };
 
+/// Whether a BTF whose views all hold the same values is shaded from one view sample.
+enum class ViewSkip {
+  kDetect,  ///< the constructor compares the views bitwise (the default)
+  kNever,   ///< always interpolate 4 view samples: the path the skip is tested and measured against
+};
+
 /// The 1 (nearest) or 4 (bilinear) texels and weights for texture coordinates (u, v), wrapping.
 struct BtfTexelSamples {
   std::array<int, 4> texel{};
@@ -94,7 +100,7 @@ class Btf {
   Btf() = default;
   /// rgb must hold resolution^2 * view_side^2 * light_side^2 * 3 values (ParameterError).
   Btf(std::string material, int resolution, int view_side, int light_side, std::vector<float> rgb,
-      nlohmann::json parameters = nlohmann::json::object());
+      nlohmann::json parameters = nlohmann::json::object(), ViewSkip skip = ViewSkip::kDetect);
 
   const std::string& material() const { return material_; }
   int resolution() const { return resolution_; }  ///< U
@@ -121,13 +127,19 @@ class Btf {
   std::span<const float> light_vector(int texel, int view) const {
     return {rgb_.data() + offset(texel, view, 0), static_cast<std::size_t>(light_count()) * 3};
   }
-  /// True when every view holds bitwise the same values (a Lambertian without meso-structure):
-  /// shading may then skip view interpolation.
+  /// True when every view of every texel holds bitwise the same 3 M values (a Lambertian without
+  /// meso-structure, or view_side 1), unless built with ViewSkip::kNever. Then eval, eval_lights
+  /// and shade skip the view interpolation and read view 0 with weight exactly 1 (docs/btf.md
+  /// "Diffuse BTFs"): with nearest texels b(u, e, .) is the stored vector itself, where the 4
+  /// interpolated samples would carry the rounding of weights that sum to 1 only within 3 ulps.
   bool view_independent() const { return view_independent_; }
 
   /// Texel index at (u, v): nearest with wrap-around, u and v in any range.
   int texel_at(Vec2 uv) const;
   BtfTexelSamples texel_samples(Vec2 uv, TexelFilter filter) const;
+  /// The view samples shading reads at view_local: btf_view_samples, or view 0 with weight 1 (and
+  /// 3 zero weights) when view_independent().
+  BtfViewSamples view_samples(Vec3 view_local) const;
 
   /// b(uv, e, d_light): texel filter, then view interpolation.
   Rgb eval(Vec2 uv, Vec3 view_local, int light, TexelFilter filter = TexelFilter::kNearest) const;
@@ -162,6 +174,10 @@ struct BtfStats {
   std::size_t non_finite = 0;
 };
 BtfStats btf_stats(const Btf& btf);
+
+/// A copy of `btf` built with ViewSkip::kNever: the same values, shaded by interpolating 4 view
+/// samples even where they are equal.
+Btf without_view_skip(const Btf& btf);
 
 /// Archive round trip (kind "btf"; sections "rgb" float32, "view_directions" and
 /// "light_directions" float32 x 3; metadata: material, resolution, view_side, light_side,

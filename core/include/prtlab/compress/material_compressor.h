@@ -87,6 +87,13 @@ class DeviceMaterial {
   /// Bytes of material data one hit pixel of `part` reads to build b(u, e, .) with `filter`:
   /// the material's share of the shading pass's bandwidth bound.
   virtual std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const = 0;
+  /// Whether keeping b(u, e, .) of a hit pixel of `part` on the device between light changes
+  /// (the shader's view cache) can save work over evaluating the material again: false only when
+  /// the lookup itself is one read of the vector the cache would hold (a view-independent `full`
+  /// BTF with nearest texels). The shader skips the cache when no part gains from it.
+  virtual bool view_cache_useful(std::size_t /*part*/, TexelFilter /*filter*/) const {
+    return true;
+  }
 };
 
 class CompressedMaterial {

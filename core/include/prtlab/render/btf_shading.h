@@ -23,10 +23,10 @@
 // View cache (DeviceBtfShader, ShadingOptions::cache_view_vectors, on by default): the
 // view-interpolated BTF vector b(u(x), e(x), .) (M RGB values) of every hit pixel depends on
 // the view only. It is computed once per G-buffer (a "view-cache" kernel reading the 4 view
-// samples x 1 or 4 texels) and kept on the device; every shading pass then reads M RGB values
-// of b per pixel instead of 4 (nearest) or 16 (bilinear) times as many: a light change only
-// does the dot products. Without it, one kernel interpolates and dots in one pass.
-// docs/rendering.md "BTF shading" has the measurements.
+// samples, 1 for a view-independent BTF, x 1 or 4 texels) and kept on the device; every shading
+// pass then reads M RGB values of b per pixel instead of 4 (nearest) or 16 (bilinear) times as
+// many: a light change only does the dot products. Without it, one kernel interpolates and dots in
+// one pass. docs/rendering.md "BTF shading" has the measurements.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -54,7 +54,9 @@ struct ShadingOptions {
   TexelFilter filter = TexelFilter::kNearest;
   bool background = true;  ///< misses show the environment (needs a background cubemap)
   /// DeviceBtfShader only: keep b(u, e) per hit pixel on the device between light changes
-  /// (see the file comment). The image is the same either way (to float rounding).
+  /// (see the file comment), unless no part's material gains from it
+  /// (DeviceMaterial::view_cache_useful: every part a view-independent `full` BTF with nearest
+  /// texels). The image is the same either way (to float rounding).
   bool cache_view_vectors = true;
 };
 
@@ -112,6 +114,9 @@ class DeviceBtfShader {
   double shade();
   /// Kernel milliseconds of the view-cache kernel in the last shade() (0 when it did not run).
   double last_view_cache_ms() const;
+  /// Whether shade() runs the cached kernels: ShadingOptions::cache_view_vectors and some part's
+  /// material gains from the cache; else the single-pass kernel.
+  bool uses_view_cache() const;
   RgbImage read_image() const;
 
   /// Bytes of material and L* data the kernel reads for the current G-buffer (each hit pixel:
