@@ -8,6 +8,7 @@
 #include "experiment_run.h"
 #include "experiment_spec.h"
 #include "paper_table.h"
+#include "plot_script.h"
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"

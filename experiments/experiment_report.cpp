@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 
+#include "plot_script.h"
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
 #include "prtlab/storage/atomic_file.h"
@@ -20,7 +21,8 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 // The largest L* error (relative L2, worst environment) a lossless backend shows from float
-// rounding alone is around 1e-7; below this the report treats backends as exact.
+// rounding alone sits orders of magnitude below this; below it the report treats backends as
+// exact.
 constexpr double kExactError = 1e-6;
 
 double num(const json& v) {
@@ -96,7 +98,7 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   const double tol = result.at("experiment").at("target").at("tolerance").get<double>();
   md += fmt::format("## {} at equal storage\n\n", name);
   md += fmt::format(
-      "Target: {:.3f} MB ({}), each backend's size knob searched to within {:.0f} %. Scene: {} "
+      "Target: {:.3f} MB ({}), each backend's size knob searched to within {:g} %. Scene: {} "
       "vertices, M = {}, N = {}, nnz(T) = {}.\n\n",
       target / 1e6,
       scene.at("target_backend").is_string()
@@ -138,8 +140,7 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   }
   md += "\n";
 
-  // The winner among the backends that reached the target.
-  // Candidates: every backend at the target or below it (less storage is no handicap).
+  // The winner among every backend at the target or below it (less storage is no handicap).
   std::vector<const json*> reached;
   for (const json* p : points_of(result, name))
     if (num(p->at("storage_ratio")) <= 1.0 + tol && p->at("lstar_rel_l2_mean").is_number())
@@ -159,18 +160,23 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   if (reached.empty()) {
     md += "No backend reached the target storage or went below it.\n\n";
   } else if (exact_ones.size() >= 2) {
-    std::sort(exact_ones.begin(), exact_ones.end(),
-              [&](const json* a, const json* b) { return speed(a) < speed(b); });
+    // By relight time; untimed runs (NaN) keep their order.
+    std::stable_sort(exact_ones.begin(), exact_ones.end(),
+                     [&](const json* a, const json* b) { return speed(a) < speed(b); });
     std::string names;
     for (const json* p : exact_ones)
       names += (names.empty() ? "`" : ", `") + p->at("backend").get<std::string>() + "`";
     md += fmt::format(
-        "**Exact at the target storage or below: {}** (L* error at float rounding, below {:.0e}); "
-        "the fastest "
-        "relight among them is `{}` ({:.3f} ms against {:.3f} ms for `{}`, {:.2f}x).",
-        names, kExactError, exact_ones[0]->at("backend").get<std::string>(), speed(exact_ones[0]),
-        speed(exact_ones[1]), exact_ones[1]->at("backend").get<std::string>(),
-        speed(exact_ones[1]) / speed(exact_ones[0]));
+        "**Exact at the target storage or below: {}** (L* error at float rounding, below {:.0e})",
+        names, kExactError);
+    if (std::isfinite(speed(exact_ones[0])) && std::isfinite(speed(exact_ones[1])))
+      md += fmt::format(
+          "; the fastest relight among them is `{}` ({:.3f} ms against {:.3f} ms for "
+          "`{}`, {:.2f}x)",
+          exact_ones[0]->at("backend").get<std::string>(), speed(exact_ones[0]),
+          speed(exact_ones[1]), exact_ones[1]->at("backend").get<std::string>(),
+          speed(exact_ones[1]) / speed(exact_ones[0]));
+    md += ".";
     const json* lossy = nullptr;
     for (const json* p : reached)
       if (!exact(p)) {
@@ -188,13 +194,14 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   } else {
     const double e0 = num(reached[0]->at("lstar_rel_l2_mean"));
     const double e1 = num(reached[1]->at("lstar_rel_l2_mean"));
+    // A factor against an error at float rounding means nothing: say exact instead.
     md += fmt::format(
         "**Lowest error at equal storage: `{}`** (mean relative L2 of L* {}{}), {} the runner-up "
         "`{}` ({}).\n\n",
         reached[0]->at("backend").get<std::string>(), fmt_err(reached[0]->at("lstar_rel_l2_mean")),
         exact(reached[0]) ? ", exact to float rounding" : "",
-        fmt::format("{:.3g}x lower than", e1 / e0), reached[1]->at("backend").get<std::string>(),
-        fmt_err(reached[1]->at("lstar_rel_l2_mean")));
+        exact(reached[0]) ? std::string("against") : fmt::format("{:.3g}x lower than", e1 / e0),
+        reached[1]->at("backend").get<std::string>(), fmt_err(reached[1]->at("lstar_rel_l2_mean")));
   }
   std::string unreached;
   for (const auto& s : result.at("searches"))
@@ -272,9 +279,13 @@ void sweep_section(std::string& md, const json& result, const json& scene, const
     for (const json* p : points_of(result, name)) {
       md += fmt::format(
           "| `{}` | {} | {} | {} of {} | {} | {} | {} | {} |", p->at("backend").get<std::string>(),
-          params_cell(p->at("params")), p->value("culls", false) ? "yes" : "no",
-          p->value("visible_vertices", json(nullptr)).dump(), p->at("vertices").dump(),
-          fmt_ms(p->value("relight_ms_frame_culled", json(nullptr))),
+          params_cell(p->at("params")),
+          p->value("culls", json(nullptr)).is_boolean()
+              ? (p->at("culls").get<bool>() ? "yes" : "no")
+              : "n/a",
+          p->value("visible_vertices", json(nullptr)).is_number() ? p->at("visible_vertices").dump()
+                                                                  : std::string("n/a"),
+          p->at("vertices").dump(), fmt_ms(p->value("relight_ms_frame_culled", json(nullptr))),
           fmt_ms(p->value("relight_ms_frame_unculled", json(nullptr))),
           fmt_num(p->value("cull_speedup", json(nullptr)), "{:.2f}x"),
           p->value("cull_identical", json(nullptr)).is_boolean()
@@ -328,43 +339,6 @@ void scaling_section(std::string& md, const json& result, const fs::path& folder
 }
 
 }  // namespace
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-std::optional<std::string> python_with_matplotlib() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("PRTLAB_PYTHON"); env && *env) candidates.emplace_back(env);
-  candidates.emplace_back("/usr/bin/python3");
-  candidates.emplace_back("python3");
-  for (const auto& py : candidates) {
-    const std::string probe = shell_quote(py) + " -c 'import matplotlib' >/dev/null 2>&1";
-    if (std::system(probe.c_str()) == 0) return py;
-  }
-  return std::nullopt;
-}
-
-bool run_plot_script(const std::string& script, const std::string& args, bool quiet) {
-  const auto path = fs::path(build_info().source_dir) / "scripts" / script;
-  const auto py = python_with_matplotlib();
-  if (!py || !fs::exists(path)) {
-    std::fprintf(stderr,
-                 "prtlab: no plot (needs python3 with matplotlib, package python3-matplotlib); "
-                 "run: python3 scripts/%s %s\n",
-                 script.c_str(), args.c_str());
-    return false;
-  }
-  const std::string cmd = shell_quote(*py) + " " + shell_quote(path.string()) + " " + args +
-                          (quiet ? " >/dev/null" : " >&2");
-  if (std::system(cmd.c_str()) != 0) {
-    std::fprintf(stderr, "prtlab: warning: the plot script failed: %s\n", cmd.c_str());
-    return false;
-  }
-  return true;
-}
 
 std::string render_experiment_markdown(const json& result, const fs::path& folder) {
   const json& e = result.at("experiment");
@@ -440,6 +414,9 @@ void write_experiment_report(const fs::path& folder, bool plots, bool quiet) {
   if (!result)
     throw InputError(folder / "result.json",
                      "missing or not valid JSON (run the experiment first)");
+  // perceptual.json belongs to the plots of this result: never let an older one survive.
+  std::error_code ec;
+  fs::remove(folder / "perceptual.json", ec);
   if (plots) run_plot_script("plot_experiment.py", shell_quote(folder.string()), quiet);
   try {
     write_text_atomically(folder / "README.md", render_experiment_markdown(*result, folder));

@@ -16,6 +16,7 @@
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/render/image_error.h"
 #include "prtlab/storage/atomic_file.h"
+#include "result_images.h"
 #include "result_tables.h"
 #include "scene_variants.h"
 #include "storage_search.h"
@@ -108,70 +109,27 @@ void mark_pareto(json& points) {
   }
 }
 
-std::string slug(std::string s) {
-  for (char& c : s)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
-  return s;
-}
-
-// The kept images of the points of one scene: tone-mapped PNGs at the exact image's exposure,
-// and false-colour maps of the per-pixel relative error on one scale for all backends (the
-// largest 99th percentile among them), so that the maps compare.
-json write_scene_images(const SceneBench& bench, const std::vector<PointOutcome*>& outcomes,
-                        const fs::path& folder) {
-  const fs::path dir = folder / "images";
-  fs::create_directories(dir);
-  const std::size_t lights = bench.lights.size();
-  json written = json::object();
-  std::vector<double> scales(bench.exact_images.size(), 0.0);
-  for (const auto* o : outcomes)
-    for (std::size_t i = 0; i < o->images.size(); ++i) {
-      auto e = relative_error_map(o->images[i], bench.exact_images[i], bench.masks[i / lights]);
-      std::vector<double> counted;
-      for (std::size_t p = 0; p < e.size(); ++p)
-        if (bench.masks[i / lights][p]) counted.push_back(e[p]);
-      if (counted.empty()) continue;
-      const std::size_t k =
-          static_cast<std::size_t>(0.99 * static_cast<double>(counted.size() - 1));
-      std::nth_element(counted.begin(), counted.begin() + static_cast<std::ptrdiff_t>(k),
-                       counted.end());
-      scales[i] = std::max(scales[i], counted[k]);
-    }
-  json scale_json = json::array();
-  for (std::size_t i = 0; i < bench.exact_images.size(); ++i) {
-    const std::size_t v = i / lights, l = i % lights;
-    const std::string stem = fmt::format("{}-{}-{}", slug(bench.variant.name),
-                                         slug(bench.lights[l].name), slug(bench.view_names[v]));
-    ToneMap tm;
-    tm.auto_exposure = false;
-    tm.exposure = bench.exposure[v];
-    write_png(bench.exact_images[i], dir / (stem + "-exact.png"), tm);
-    if (scales[i] <= 0) scales[i] = 1e-6;
-    scale_json.push_back({{"environment", bench.lights[l].name},
-                          {"view", bench.view_names[v]},
-                          {"exact", "images/" + stem + "-exact.png"},
-                          {"error_scale", scales[i]}});
-    for (auto* o : outcomes) {
-      if (o->images.empty()) continue;
-      const std::string b = slug(o->record["backend"].get<std::string>());
-      const std::string img = stem + "-" + b + ".png", err = stem + "-" + b + "-error.png";
-      write_png(o->images[i], dir / img, tm);
-      write_false_colour_png(
-          error_false_colour(o->images[i], bench.exact_images[i], bench.masks[v], scales[i]),
-          dir / err);
-      o->record["images"].push_back({{"environment", bench.lights[l].name},
-                                     {"view", bench.view_names[v]},
-                                     {"image", "images/" + img},
-                                     {"error_map", "images/" + err},
-                                     {"error_scale", scales[i]}});
-    }
-  }
-  return scale_json;
-}
-
 // Files this runner writes into a result folder (removed by --force before a new run).
-const std::vector<std::string> kOwnedFiles = {"result.json", "points.csv", "errors.csv",
-                                              "README.md",   ".complete",  ".started"};
+// The files a run wrote, relative to its folder: the manifest kept in .complete.
+std::vector<std::string> written_files(const fs::path& folder) {
+  std::vector<std::string> out = {"result.json", "points.csv", "errors.csv"};
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder / "images", ec))
+    out.push_back("images/" + e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The manifest of a complete run (empty for an older .complete without one).
+std::vector<std::string> manifest_of(const fs::path& complete) {
+  std::ifstream in(complete);
+  const json j = json::parse(in, nullptr, false);
+  std::vector<std::string> out;
+  if (j.is_object() && j.contains("files") && j["files"].is_array())
+    for (const auto& f : j["files"])
+      if (f.is_string()) out.push_back(f.get<std::string>());
+  return out;
+}
 
 }  // namespace
 
@@ -186,6 +144,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   if (!o.scenes.empty()) spec.scenes = o.scenes;
   RunSummary summary;
   summary.folder = result_folder(spec, o.out_root);
+  std::vector<std::string> previous_files;
   const fs::path& folder = summary.folder;
   if (fs::exists(folder / ".complete")) {
     if (!o.force)
@@ -193,11 +152,11 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
           "{} holds a complete run; pass --force to overwrite it, or redraw its report with "
           "prtlab experiment report {}",
           folder.string(), folder.string()));
-    for (const auto& f : kOwnedFiles) fs::remove(folder / f);
-    std::error_code ec;
-    fs::remove_all(folder / "images", ec);
-    for (const auto& e : fs::directory_iterator(folder, ec))
-      if (e.path().extension() == ".png") fs::remove(e.path());
+    // The old files stay until the new run has written its own; then those of the old
+    // manifest that the new run did not write again are removed (nothing else in the folder
+    // is touched). Without .complete an interrupted forced run resumes like any other.
+    previous_files = manifest_of(folder / ".complete");
+    fs::remove(folder / ".complete");
   }
   summary.resumed = fs::exists(folder / ".started");
   fs::create_directories(folder);
@@ -242,14 +201,19 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
 
   json points = json::array(), searches = json::array(), scenes = json::array(),
        image_sets = json::array();
+  // The ETA counts the whole wall time of a computed point: its storage search, its
+  // measurement and its share of the scene's preparation.
+  auto since = std::chrono::steady_clock::now();
   const auto account = [&](const PointOutcome& out) {
     ++done;
+    const double wall = seconds_since(since);
+    since = std::chrono::steady_clock::now();
     if (out.cache_hit) {
       ++hits;
       saved_seconds += number_or_nan(out.record["measure_seconds"]);
     } else {
       ++computed;
-      computed_seconds += out.seconds;
+      computed_seconds += std::max(wall, out.seconds);
     }
     if (o.stop_after_points > 0 && static_cast<int>(done) >= o.stop_after_points)
       throw RunInterrupted(fmt::format("stopped after {} points", done));
@@ -371,11 +335,16 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                    {"stage_hits", cache.stats().hits},
                    {"stage_misses", cache.stats().misses}}}};
   write_result_files(result, folder);
-  write_text_atomically(
-      folder / ".complete",
-      json({{"date_utc", prov.date_utc}, {"git", prov.git_hash}, {"points", points.size()}})
-              .dump(2) +
-          "\n");
+  const std::vector<std::string> files = written_files(folder);
+  for (const auto& f : previous_files)
+    if (!std::binary_search(files.begin(), files.end(), f) && f.find("..") == std::string::npos)
+      fs::remove(folder / f);
+  write_text_atomically(folder / ".complete", json({{"date_utc", prov.date_utc},
+                                                    {"git", prov.git_hash},
+                                                    {"points", points.size()},
+                                                    {"files", files}})
+                                                      .dump(2) +
+                                                  "\n");
   fs::remove(folder / ".started");
   summary.result = std::move(result);
   return summary;

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "point_measurement.h"
 #include "prtlab/storage/atomic_file.h"
 
@@ -23,7 +25,8 @@ std::string csv_cell(const json& v) {
   if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
   if (v.is_number_float()) return fmt::format("{}", v.get<double>());
   const std::string s = v.is_string() ? v.get<std::string>() : v.dump();
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  // '#' too: readers skipping comment lines (pandas comment='#') cut a line there.
+  if (s.find_first_of(",\"\n\r#") == std::string::npos) return s;
   std::string q = "\"";
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
@@ -46,9 +49,12 @@ void write_result_files(const json& result, const std::filesystem::path& folder)
   const json experiment = spec.at("name"), variant = spec.at("variant");
   // Provenance first, as comment lines (pandas.read_csv(comment='#') skips them).
   const json& prov = result.at("provenance");
-  std::string head = fmt::format("# experiment: {} {}\n# command: {}\n# provenance: {}\n",
-                                 experiment.get<std::string>(), variant.get<std::string>(),
-                                 prov.value("command", std::string()), prov.dump());
+  std::string command = prov.value("command", std::string());
+  std::replace(command.begin(), command.end(), '\n', ' ');
+  std::replace(command.begin(), command.end(), '\r', ' ');
+  std::string head =
+      fmt::format("# experiment: {} {}\n# command: {}\n# provenance: {}\n",
+                  experiment.get<std::string>(), variant.get<std::string>(), command, prov.dump());
   std::string points = head + csv_line(points_csv_header());
   std::string errors = head + csv_line(errors_csv_header());
   for (const auto& p : result.at("points")) {

@@ -54,7 +54,9 @@ std::vector<SceneVariant> scene_variants(
     v.name = base_name + suffix;
     t.insert_or_assign("name", v.name);
     std::ostringstream text;
-    text << "# Derived by prtlab experiment from " << file.string() << "\n" << t << "\n";
+    // The base scene by name, not path: the file (and every stage keyed on it) is then the
+    // same in every checkout.
+    text << "# Derived by prtlab experiment from scene '" << base_name << "'\n" << t << "\n";
     fs::create_directories(derived_dir);
     // Mesh names resolve against the data directory, not the scene's folder, so the derived
     // file may live anywhere.

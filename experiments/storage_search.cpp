@@ -44,7 +44,6 @@ StorageSearch search_equal_storage(const SizeKnob& knob, bool integer, std::uint
   StorageSearch s;
   std::map<double, std::uint64_t> seen;
   const auto probe = [&](double v) {
-    if (integer) v = std::round(v);
     if (auto it = seen.find(v); it != seen.end()) return it->second;
     const std::uint64_t bytes = storage_at(v);
     seen[v] = bytes;
@@ -57,79 +56,88 @@ StorageSearch search_equal_storage(const SizeKnob& knob, bool integer, std::uint
   const auto within = [&](std::uint64_t bytes) {
     return std::abs(ratio(bytes) - 1.0) <= tolerance;
   };
-  const auto finish = [&]() {
-    // The closest probe in ratio (|log r|, so 0.9x and 1.11x count alike).
+  const auto finish = [&](std::string note) {
+    // A probe within the tolerance first, then the closest in |log r| (0.9x and 1.11x alike).
     const KnobProbe* best = nullptr;
+    const auto better = [&](const KnobProbe& a, const KnobProbe& b) {
+      if (within(a.bytes) != within(b.bytes)) return within(a.bytes);
+      return std::abs(std::log(ratio(a.bytes))) < std::abs(std::log(ratio(b.bytes)));
+    };
     for (const auto& p : s.probes)
-      if (!best || std::abs(std::log(ratio(p.bytes))) < std::abs(std::log(ratio(best->bytes))))
-        best = &p;
+      if (!best || better(p, *best)) best = &p;
     s.value = best->value;
     s.bytes = best->bytes;
     s.ratio = ratio(best->bytes);
     s.reached = within(best->bytes);
+    s.note = s.reached ? std::string() : std::move(note);
     return s;
   };
+  const auto pct = [&] { return fmt::format("{:g} %", 100 * tolerance); };
 
-  // `small` is the end with the least storage, `large` the one with the most.
+  // The bracket is kept in knob values (exact integers for an int knob); candidates are
+  // interpolated on the knob's axis. `small` is the end with the least storage.
   const bool more = knob.direction == SizeKnob::Direction::kLargerIsMoreStorage;
-  double small = more ? *knob.min : *knob.max, large = more ? *knob.max : *knob.min;
-  const std::uint64_t b_small = probe(small);
-  if (within(b_small)) return finish();
-  const std::uint64_t b_large = probe(large);
-  if (within(b_large)) return finish();
-  if (target < b_small) {
-    finish();
-    s.note = fmt::format(
-        "the target {:.3f} MB is below the least storage the knob '{}' reaches "
-        "({:.3f} MB at {} = {})",
-        target / 1e6, knob.key, b_small / 1e6, knob.key, small);
-    return s;
-  }
-  if (target > b_large) {
-    finish();
-    s.note = fmt::format(
-        "the target {:.3f} MB is above the most storage the knob '{}' reaches "
-        "({:.3f} MB at {} = {})",
-        target / 1e6, knob.key, b_large / 1e6, knob.key, large);
-    return s;
-  }
-  double lo = to_axis(knob, small), hi = to_axis(knob, large);
-  double log_lo = std::log(static_cast<double>(std::max<std::uint64_t>(b_small, 1)));
-  double log_hi = std::log(static_cast<double>(std::max<std::uint64_t>(b_large, 1)));
+  const double lo_end = integer ? std::ceil(*knob.min) : *knob.min;
+  const double hi_end = integer ? std::floor(*knob.max) : *knob.max;
+  double small = more ? lo_end : hi_end, large = more ? hi_end : lo_end;
+  std::uint64_t b_small = probe(small);
+  if (within(b_small)) return finish("");
+  std::uint64_t b_large = probe(large);
+  if (within(b_large)) return finish("");
+  if (b_small > b_large)
+    return finish(fmt::format(
+        "the storage does not move the way the knob '{}' declares ({:.3f} MB at {} = {}, {:.3f} "
+        "MB at {} = {})",
+        knob.key, b_small / 1e6, knob.key, small, b_large / 1e6, knob.key, large));
+  if (target < b_small)
+    return finish(
+        fmt::format("the target {:.3f} MB is below the least storage the knob '{}' "
+                    "reaches ({:.3f} MB at {} = {})",
+                    target / 1e6, knob.key, b_small / 1e6, knob.key, small));
+  if (target > b_large)
+    return finish(
+        fmt::format("the target {:.3f} MB is above the most storage the knob '{}' "
+                    "reaches ({:.3f} MB at {} = {})",
+                    target / 1e6, knob.key, b_large / 1e6, knob.key, large));
   const double log_t = std::log(static_cast<double>(target));
+  const auto log_of = [](std::uint64_t b) {
+    return std::log(static_cast<double>(std::max<std::uint64_t>(b, 1)));
+  };
   while (static_cast<int>(s.probes.size()) < max_probes) {
-    // Interpolate, then keep the probe at least a fifth of the bracket from either end.
-    double t = log_hi > log_lo ? (log_t - log_lo) / (log_hi - log_lo) : 0.5;
-    t = std::clamp(t, 0.2, 0.8);
-    double v = from_axis(knob, lo + t * (hi - lo));
+    // Interpolate log(storage), then keep the candidate at least a fifth of the bracket from
+    // either end, so that every probe shrinks the bracket (plateaus and steps included).
+    const double a = to_axis(knob, small), b = to_axis(knob, large);
+    const double la = log_of(b_small), lb = log_of(b_large);
+    const double t = std::clamp(lb > la ? (log_t - la) / (lb - la) : 0.5, 0.2, 0.8);
+    double v = from_axis(knob, a + t * (b - a));
+    const double lo = std::min(small, large), hi = std::max(small, large);
     if (integer) {
       v = std::round(v);
-      const double vlo = from_axis(knob, lo), vhi = from_axis(knob, hi);
-      const double a = std::min(vlo, vhi), b = std::max(vlo, vhi);
-      if (v <= a) v = a + 1;
-      if (v >= b) v = b - 1;
-      if (v <= a || v >= b) break;  // no integer strictly inside the bracket
+      if (v <= lo) v = lo + 1;
+      if (v >= hi) v = hi - 1;
     }
+    // Nothing strictly inside the bracket (an int knob at neighbouring values, or a real knob
+    // narrowed to its last representable step) or a value already tried: the storage jumps over
+    // the target.
+    if (!(v > lo && v < hi) || seen.contains(v))
+      return finish(
+          fmt::format("the storage jumps over the target between {} = {} ({:.3f} MB) "
+                      "and {} ({:.3f} MB)",
+                      knob.key, small, b_small / 1e6, large, b_large / 1e6));
     const std::uint64_t bytes = probe(v);
-    if (within(bytes)) return finish();
+    if (within(bytes)) return finish("");
     if (bytes < target) {
-      lo = to_axis(knob, v);
-      log_lo = std::log(static_cast<double>(std::max<std::uint64_t>(bytes, 1)));
+      small = v;
+      b_small = bytes;
     } else {
-      hi = to_axis(knob, v);
-      log_hi = std::log(static_cast<double>(std::max<std::uint64_t>(bytes, 1)));
+      large = v;
+      b_large = bytes;
     }
   }
-  finish();
-  if (!s.reached)
-    s.note = static_cast<int>(s.probes.size()) >= max_probes
-                 ? fmt::format("not within {:.0f} % after {} compressions", 100 * tolerance,
-                               s.probes.size())
-                 : fmt::format(
-                       "the storage jumps over the target between two neighbouring "
-                       "values of '{}'",
-                       knob.key);
-  return s;
+  return finish(
+      fmt::format("not within {} after {} compressions (closest: {:.3f} MB between {} "
+                  "and {})",
+                  pct(), s.probes.size(), b_small / 1e6, small, large));
 }
 
 }  // namespace prt::experiments

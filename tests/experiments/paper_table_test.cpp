@@ -375,7 +375,9 @@ TEST(LosslessCheck, BiclusterBackendIsExactOnARandomTransfer) {
   const auto c = check_lossless(*ct, t, spec.resolution, {.device = default_context()});
   EXPECT_TRUE(c.exact()) << c.verdict();
   EXPECT_EQ(c.cpp.mismatches, 0u);
-  if (c.opencl) EXPECT_EQ(c.opencl->mismatches, 0u);
+  if (c.opencl) {
+    EXPECT_EQ(c.opencl->mismatches, 0u);
+  }
 }
 
 TEST(LosslessCheck, ProbesTheOpenClRelightToo) {

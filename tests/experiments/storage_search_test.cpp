@@ -12,12 +12,7 @@ namespace {
 SizeKnob knob(double lo, double hi,
               SizeKnob::Direction d = SizeKnob::Direction::kLargerIsMoreStorage,
               SizeKnob::Scale s = SizeKnob::Scale::kLinear) {
-  SizeKnob k;
-  k.key = "k";
-  k.min = lo;
-  k.max = hi;
-  k.direction = d;
-  k.scale = s;
+  SizeKnob k{.key = std::string("k"), .direction = d, .min = lo, .max = hi, .scale = s};
   return k;
 }
 
@@ -92,6 +87,55 @@ TEST(StorageSearch, ReachedWithinTheProbeBudgetOrSaysSo) {
   if (!s.reached) {
     EXPECT_NE(s.note.find("after 5 compressions"), std::string::npos) << s.note;
   }
+}
+
+TEST(StorageSearch, IntegerLogKnobTerminatesOnEveryUnreachableTarget) {
+  // exp(log(n)) is not always n: the bracket must stay on exact integers.
+  const auto k = knob(1, 1000, SizeKnob::Direction::kLargerIsMoreStorage, SizeKnob::Scale::kLog);
+  for (std::uint64_t target = 150000; target < 3000000; target += 9973) {
+    int calls = 0;
+    const auto s = search_equal_storage(k, true, target, 0.01, 40, [&](double v) {
+      ++calls;
+      EXPECT_EQ(v, std::round(v));
+      EXPECT_LE(calls, 40) << "target " << target;
+      return static_cast<std::uint64_t>(v * 1e5);
+    });
+    EXPECT_LE(calls, 40);
+    if (!s.reached) {
+      EXPECT_NE(s.note.find("jumps over"), std::string::npos) << target << ": " << s.note;
+    }
+  }
+}
+
+TEST(StorageSearch, ARealKnobOnAStepCurveStopsAtTheStep) {
+  // The target lies in the gap of a staircase: no value reaches it, and even 200 probes must
+  // end with the jump named, not exhaust the budget.
+  const auto stairs = [](double v) {
+    return static_cast<std::uint64_t>(1e5 * (1 + std::floor(v * 10)));
+  };
+  const auto s = search_equal_storage(knob(0, 1), false, 550000, 0.02, 200, stairs);
+  EXPECT_FALSE(s.reached);
+  EXPECT_NE(s.note.find("jumps over"), std::string::npos) << s.note;
+  EXPECT_LT(s.probes.size(), 200u);
+  EXPECT_TRUE(s.bytes == 500000 || s.bytes == 600000);
+}
+
+TEST(StorageSearch, SaysWhenTheEndsContradictTheDeclaredDirection) {
+  const auto s =
+      search_equal_storage(knob(1, 19, SizeKnob::Direction::kLargerIsLessStorage), true, 500000,
+                           0.05, 10, [](double v) { return static_cast<std::uint64_t>(1e5 * v); });
+  EXPECT_FALSE(s.reached);
+  EXPECT_NE(s.note.find("does not move the way"), std::string::npos) << s.note;
+}
+
+TEST(StorageSearch, PrefersAProbeWithinTheTolerance) {
+  // Probes land at 1.051 and 0.9502 of the target: only the second is within 5 %.
+  const auto s = search_equal_storage(knob(0, 1), false, 1000000, 0.05, 3, [](double v) {
+    return static_cast<std::uint64_t>(v == 0 ? 10000 : v == 1 ? 1051000 : 950200);
+  });
+  EXPECT_TRUE(s.reached) << s.note;
+  EXPECT_EQ(s.bytes, 950200u);
+  EXPECT_TRUE(s.note.empty());
 }
 
 TEST(KnobValues, SpreadsOverTheScaleAndDeduplicatesIntegers) {
