@@ -1,5 +1,8 @@
 // prtlab experiment table1|table2|run|report|all|list: the papers' tables and the experiment files
 // (docs/experiments.md).
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -148,34 +151,74 @@ void run_file(const RunCli& o) {
 
 void run_all(const RunCli& o) {
   const std::string variant = variant_of(o);
+  const bool quiet = global_options().quiet;
   auto ctx = open_device_from_options();
-  // The paper's tables first (on the bunny alone for --quick), then every experiment file.
+  // The paper's tables first (--quick: on the bunny alone, into <out>/tables-quick/ so that the
+  // full tables are never replaced by partial ones), then every experiment file.
   for (const char* name : {"table1", "table2"}) {
     TableCli t;
     t.table = name;
-    t.out = o.out;
+    t.out = o.quick ? (std::filesystem::path(o.out) / "tables-quick").string() : o.out;
     t.force = o.recompute;
     t.plot = o.plot;
     if (o.quick) t.scenes = {"bunny"};
     if (!o.scenes.empty()) t.scenes = o.scenes;
-    if (!global_options().quiet) std::fprintf(stderr, "== experiment %s\n", name);
+    if (!quiet) std::fprintf(stderr, "== experiment %s\n", name);
     run_table(t);
   }
-  for (const auto& file : experiments::experiment_files()) {
-    const auto variants = experiments::experiment_variants(file);
-    std::string v = variant;
-    if (!v.empty() && std::find(variants.begin(), variants.end(), v) == variants.end()) v = "";
-    if (!global_options().quiet)
-      std::fprintf(stderr, "== experiment %s%s\n", file.stem().string().c_str(),
-                   v.empty() ? "" : (" (" + v + ")").c_str());
-    print_run(run_one(file, v, o, ctx ? &*ctx : nullptr), false);
+  // One file's failure (a backend it names is not loaded, a scene missing) does not stop the
+  // others; the command fails at the end, naming each.
+  std::vector<std::string> failures;
+  const auto files = experiments::experiment_files();
+  for (const auto& file : files) {
+    try {
+      const auto variants = experiments::experiment_variants(file);
+      if (!variant.empty() &&
+          std::find(variants.begin(), variants.end(), variant) == variants.end()) {
+        if (!quiet)
+          std::fprintf(stderr, "== experiment %s: skipped (no [variant.%s])\n",
+                       file.stem().string().c_str(), variant.c_str());
+        continue;
+      }
+      const auto spec = experiments::parse_experiment(file, variant, registered_backends());
+      const auto folder = experiments::result_folder(spec, o.out);
+      if (!o.force && std::filesystem::exists(folder / ".complete")) {
+        if (!quiet)
+          std::fprintf(stderr, "== experiment %s: %s is complete (--force reruns it)\n",
+                       file.stem().string().c_str(), folder.string().c_str());
+        continue;
+      }
+      if (!quiet)
+        std::fprintf(stderr, "== experiment %s%s\n", file.stem().string().c_str(),
+                     variant.empty() ? "" : (" (" + variant + ")").c_str());
+      print_run(run_one(file, variant, o, ctx ? &*ctx : nullptr), false);
+    } catch (const Error& e) {
+      std::fprintf(stderr, "prtlab: error: %s\n", e.what());
+      failures.push_back(file.string());
+    }
+  }
+  if (!failures.empty()) {
+    std::string list;
+    for (const auto& f : failures) list += (list.empty() ? "" : ", ") + f;
+    throw Error(fmt::format("experiment all: {} of {} experiment files failed: {}", failures.size(),
+                            files.size(), list));
   }
 }
 
 void list_experiments(bool json) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& file : experiments::experiment_files()) {
-    const auto spec = experiments::parse_experiment(file, "", registered_backends());
+    experiments::ExperimentSpec spec;
+    try {
+      spec = experiments::parse_experiment(file, "", registered_backends());
+    } catch (const Error& e) {
+      list.push_back({{"name", file.stem().string()},
+                      {"title", std::string("(cannot be parsed: ") + e.what() + ")"},
+                      {"file", file.string()},
+                      {"kind", "unknown"},
+                      {"variants", nlohmann::json::array()}});
+      continue;
+    }
     list.push_back({{"name", spec.name},
                     {"title", spec.title},
                     {"file", file.string()},

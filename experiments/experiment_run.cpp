@@ -110,13 +110,20 @@ void mark_pareto(json& points) {
 }
 
 // Files this runner writes into a result folder (removed by --force before a new run).
-// The files a run wrote, relative to its folder: the manifest kept in .complete.
-std::vector<std::string> written_files(const fs::path& folder) {
+// The files a run wrote, relative to its folder (the manifest kept in .complete): the result
+// files and every image its result names.
+std::vector<std::string> written_files(const json& result) {
   std::vector<std::string> out = {"result.json", "points.csv", "errors.csv"};
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(folder / "images", ec))
-    out.push_back("images/" + e.path().filename().string());
+  for (const auto& set : result.at("image_sets"))
+    for (const auto& e : set.at("images")) out.push_back(e.at("exact").get<std::string>());
+  for (const auto& p : result.at("points"))
+    if (p.contains("images"))
+      for (const auto& e : p.at("images")) {
+        out.push_back(e.at("image").get<std::string>());
+        out.push_back(e.at("error_map").get<std::string>());
+      }
   std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -335,7 +342,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                    {"stage_hits", cache.stats().hits},
                    {"stage_misses", cache.stats().misses}}}};
   write_result_files(result, folder);
-  const std::vector<std::string> files = written_files(folder);
+  const std::vector<std::string> files = written_files(result);
   for (const auto& f : previous_files)
     if (!std::binary_search(files.begin(), files.end(), f) && f.find("..") == std::string::npos)
       fs::remove(folder / f);

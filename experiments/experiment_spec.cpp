@@ -112,7 +112,7 @@ EnvironmentSpec parse_environment(const fs::path& file, const std::string& name)
       throw InputError(file, fmt::format("environment '{}': the sun ratio must be > 0", name));
     e.sun_ratio = ratio;
     e.sun_only = only;
-    e.name = fmt::format("{}-{:.0e}", only ? "sunonly" : "sun", ratio);
+    e.name = fmt::format("{}-{:g}", only ? "sunonly" : "sun", ratio);
     return e;
   }
   try {
@@ -138,6 +138,15 @@ toml::table load_table(const fs::path& file) {
   } catch (const toml::parse_error& e) {
     throw InputError(file, fmt::format("line {}: {}", e.source().begin.line, e.description()));
   }
+}
+
+// The table under `key`, nullptr when absent; an InputError when the key holds something else.
+const toml::table* table_at(const fs::path& file, const toml::table& t, std::string_view key) {
+  const toml::node* n = t.get(key);
+  if (!n) return nullptr;
+  const auto* table = n->as_table();
+  if (!table) throw InputError(file, line_of(*n) + fmt::format("'{}' must be a table", key));
+  return table;
 }
 
 void check_keys(const fs::path& file, const toml::table& t, const std::set<std::string>& allowed,
@@ -204,6 +213,11 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   const toml::table root = load_table(file);
   check_keys(file, root, kTopKeys, "the experiment");
   toml::table t = root;
+  if (!variant.empty() &&
+      variant.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_") != std::string::npos)
+    throw InputError(file, fmt::format("variant '{}': use lower-case letters, digits, '-' and "
+                                       "'_' (it names the result folder)",
+                                       variant));
   if (!variant.empty()) {
     const auto* variants = root["variant"].as_table();
     const auto* chosen = variants ? (*variants)[variant].as_table() : nullptr;
@@ -241,7 +255,7 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   if (!scenes) throw InputError(file, "missing required key 'scenes'");
   s.scenes = string_list(file, *scenes, "scenes");
   if (s.scenes.empty()) throw InputError(file, "'scenes' is empty");
-  if (const auto* g = t["scene_grid"].as_table()) {
+  if (const auto* g = table_at(file, t, "scene_grid")) {
     for (const auto& [k, v] : *g) {
       const std::string key(k.str());
       if (key != "local_grid" && key != "cubemap_resolution" && key != "supersampling")
@@ -254,7 +268,9 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
         throw InputError(file, line_of(v) + fmt::format("scene_grid.{} must be a non-empty list "
                                                         "of integers",
                                                         key));
-      for (const auto& e : *arr) s.scene_grid[key].push_back(int_in(file, e, key, 1, 4096));
+      // The scene file's own limits (docs/scenes.md), so a bad value fails before any stage.
+      const int hi = key == "local_grid" ? 64 : key == "cubemap_resolution" ? 256 : 15;
+      for (const auto& e : *arr) s.scene_grid[key].push_back(int_in(file, e, key, 1, hi));
     }
   }
 
@@ -283,9 +299,9 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   });
   if (s.backends.empty()) throw InputError(file, "no backends left to run");
 
-  if (const auto* p = t["params"].as_table())
+  if (const auto* p = table_at(file, t, "params"))
     for (const auto& [k, v] : *p) s.params[std::string(k.str())] = param_table(file, v, k.str());
-  if (const auto* g = t["grid"].as_table()) {
+  if (const auto* g = table_at(file, t, "grid")) {
     for (const auto& [b, tab] : *g) {
       const auto* bt = tab.as_table();
       if (!bt)
@@ -332,8 +348,15 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
     s.environments.push_back(parse_environment(file, env));
   }
   if (s.environments.empty()) throw InputError(file, "'environments' is empty");
+  // Names key the per-environment errors, images and plots: two environments of one name
+  // would overwrite each other.
+  for (std::size_t i = 0; i < s.environments.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (s.environments[i].name == s.environments[j].name)
+        throw InputError(file,
+                         fmt::format("environment '{}' is listed twice", s.environments[i].name));
   if (const auto* v = t["views"].node()) s.views = string_list(file, *v, "views");
-  if (const auto* img = t["image"].as_table()) {
+  if (const auto* img = table_at(file, t, "image")) {
     check_keys(file, *img, {"width", "height"}, "image");
     if (const auto* w = (*img)["width"].node()) s.width = int_in(file, *w, "image.width", 8, 8192);
     if (const auto* h = (*img)["height"].node())
@@ -350,7 +373,7 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
     if (!registry.contains(s.reference))
       throw InputError(file, fmt::format("reference backend '{}' is not registered", s.reference));
   }
-  if (const auto* tg = t["target"].as_table()) {
+  if (const auto* tg = table_at(file, t, "target")) {
     check_keys(file, *tg, {"backend", "params", "megabytes", "tolerance", "max_probes"}, "target");
     if (const auto* b = (*tg)["backend"].node())
       s.target.backend = scalar<std::string>(file, *b, "target.backend");
@@ -372,7 +395,14 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   if (s.kind == ExperimentKind::kEqualStorage && !s.target.megabytes &&
       !registry.contains(s.target.backend))
     throw InputError(file, fmt::format("target backend '{}' is not registered", s.target.backend));
-  if (const auto* p = t["paper"].as_table())
+  if (s.kind == ExperimentKind::kEqualStorage && !s.target.megabytes) {
+    try {
+      (void)ParamSet(s.target.backend, registry.get(s.target.backend).params, s.target.params);
+    } catch (const Error& e) {
+      throw InputError(file, fmt::format("target.params: {}", e.what()));
+    }
+  }
+  if (const auto* p = table_at(file, t, "paper"))
     for (const auto& [k, v] : *p)
       s.paper[std::string(k.str())] = scalar<std::string>(file, v, k.str());
   if (const auto* ps = t["paper_source"].node())

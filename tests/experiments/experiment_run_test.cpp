@@ -127,6 +127,54 @@ tolerance = 0.05
   EXPECT_TRUE(search.at("reached").get<bool>());
   EXPECT_LE(search.at("probes").size(), 14u);
   EXPECT_TRUE(fs::exists(s.folder / ".complete"));
+  // The report of an untimed, imageless run renders (no timing, no PSNR: n/a, never NaN).
+  write_experiment_report(s.folder, false, true);
+  const std::string md = read(s.folder / "README.md");
+  EXPECT_NE(md.find("| `coo` |"), std::string::npos) << md;
+  EXPECT_EQ(md.find(" nan"), std::string::npos)
+      << md.substr(std::min(md.size(), md.find(" nan")), 80);
+}
+
+TEST_F(ExperimentRun, ForceReplacesOnlyWhatTheRunWrote) {
+  // An equal-storage run with images, then a forced run without one of its backends: the
+  // dropped backend's images go, a file the user put into the folder stays, and the folder is
+  // complete again.
+  const char* body = R"(
+name = "force"
+kind = "equal_storage"
+scenes = ["tiny-sphere-plane"]
+backends = [%s]
+environments = ["courtyard"]
+image = { width = 32, height = 24 }
+timing = false
+[params.bicluster]
+error = 0
+)";
+  const auto spec_with = [&](const std::string& backends) {
+    std::string text = body;
+    text.replace(text.find("%s"), 2, backends);
+    return parse(write_spec("force", text));
+  };
+  RunOptions o = options("force");
+  const RunSummary first = run_experiment(spec_with("\"bicluster\", \"uncompressed\""), o);
+  const fs::path folder = first.folder;
+  const auto image_of = [&](const std::string& backend) {
+    return folder / "images" / ("tiny-sphere-plane-courtyard-front-" + backend + ".png");
+  };
+  ASSERT_TRUE(fs::exists(image_of("uncompressed")));
+  std::ofstream(folder / "notes.txt") << "mine";
+  o.force = true;
+  const RunSummary second = run_experiment(spec_with("\"bicluster\""), o);
+  EXPECT_TRUE(fs::exists(image_of("bicluster")));
+  EXPECT_FALSE(fs::exists(image_of("uncompressed")));
+  EXPECT_TRUE(fs::exists(folder / "notes.txt"));
+  EXPECT_TRUE(fs::exists(folder / ".complete"));
+  EXPECT_EQ(second.result.at("points").size(), 1u);
+  // The equal-storage report names the target and the backend.
+  write_experiment_report(folder, false, true);
+  const std::string md = read(folder / "README.md");
+  EXPECT_NE(md.find("at equal storage"), std::string::npos);
+  EXPECT_NE(md.find("Only `bicluster` reached"), std::string::npos) << md;
 }
 
 TEST_F(ExperimentRun, ResumingAnInterruptedRunGivesTheSameFiles) {
@@ -233,6 +281,18 @@ TEST_F(ExperimentRun, TheParserNamesTheFileAndTheProblem) {
   expect_error("name = \"x\"\nscenes = [\"bunny\"]\nimage = { width = 2 }\n", "image.width");
   expect_error("name = \"x\"\nscenes = [\"bunny\"]\nscene_grid = { colour = [1] }\n", "colour");
   expect_error("name = \"x\"\nscenes = [\"bunny\"\n", "line");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nkind = \"equal_storage\"\ntarget = 36.4\n",
+               "'target' must be a table");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nenvironments = [\"sun:100\", \"sun:1e2\"]\n",
+               "listed twice");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\nscene_grid = { local_grid = [8, 100] }\n",
+               "local_grid");
+  expect_error(
+      "name = \"x\"\nscenes = [\"bunny\"]\nkind = \"equal_storage\"\n[target]\n"
+      "params = { eror = 1 }\n",
+      "eror");
+  expect_error("name = \"x\"\nscenes = [\"bunny\"]\n[variant.\"../up\"]\n", "variant '../up'",
+               "../up");
 }
 
 TEST_F(ExperimentRun, VariantsReplaceTheKeysTheyName) {
@@ -249,7 +309,7 @@ repeats = 2
   const auto top = parse(f);
   EXPECT_EQ(top.scenes, (std::vector<std::string>{"bunny"}));
   EXPECT_EQ(top.environments.size(), 9u);  // the eight Blender worlds and the sun
-  EXPECT_EQ(top.environments.back().name, "sun-3e+04");
+  EXPECT_EQ(top.environments.back().name, "sun-30000");
   const auto quick = parse(f, "quick");
   EXPECT_EQ(quick.scenes, (std::vector<std::string>{"tiny-sphere-plane"}));
   EXPECT_EQ(quick.repeats, 2);
