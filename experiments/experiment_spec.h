@@ -81,7 +81,7 @@ nlohmann::json evaluation_json(const ExperimentSpec& spec);
 /// The whole parsed spec (result.json's "experiment").
 nlohmann::json to_json(const ExperimentSpec& spec);
 
-/// The variants a file declares ("quick", "full"), in file order.
+/// The variants a file declares ("full", "quick"), sorted by name.
 std::vector<std::string> experiment_variants(const std::filesystem::path& file);
 
 /// Parse `file` with `variant` applied ("" = the top level; an unknown variant is an InputError

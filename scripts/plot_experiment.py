@@ -74,9 +74,10 @@ def equal_storage_figure(result, folder):
                 axes[2 * r][c].set_title(title, fontsize=8)
                 axes[2 * r + 1][c].imshow(mpimg.imread(os.path.join(folder, entry["error_map"])))
                 psnr = err.get("image_psnr_db")
-                if number(psnr) is not None:
-                    axes[2 * r + 1][c].set_title(f"PSNR {psnr:.1f} dB" if math.isfinite(psnr) else "exact",
-                                                 fontsize=8)
+                if err.get("image_rel_l2") == 0:
+                    axes[2 * r + 1][c].set_title("identical to the exact image", fontsize=8)
+                elif number(psnr) is not None:
+                    axes[2 * r + 1][c].set_title(f"PSNR {psnr:.1f} dB", fontsize=8)
         for ax in axes.flat:
             ax.set_xticks([])
             ax.set_yticks([])
@@ -143,17 +144,25 @@ def scaling_plot(result, folder):
     if not points:
         return
     colours = backend_colours(points)
+    base = {s["scene"]: s.get("base", s["scene"]) for s in result["scenes"]}
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
-    for backend, colour in colours.items():
-        bp = sorted([p for p in points if p["backend"] == backend],
-                    key=lambda p: overrides[p["scene"]][key])
+    # One line per backend, base scene and combination of the other swept settings.
+    groups = {}
+    for p in points:
+        others = tuple(sorted((k, v) for k, v in overrides[p["scene"]].items() if k != key))
+        groups.setdefault((p["backend"], base[p["scene"]], others), []).append(p)
+    for (backend, scene, others), bp in groups.items():
+        colour = colours[backend]
+        bp = sorted(bp, key=lambda p: overrides[p["scene"]][key])
         xs = [overrides[p["scene"]][key] for p in bp]
-        a.plot(xs, [p["storage_bytes"] / 1e6 for p in bp], "o-", color=colour, label=backend)
-        for fkey, style, label in (("fps_view", "o-", "view change"), ("fps_light", "s--", "light change")):
+        label = backend if len(groups) == len(colours) else f"{backend}, {scene}" + "".join(
+            f", {k}={v}" for k, v in others)
+        a.plot(xs, [p["storage_bytes"] / 1e6 for p in bp], "o-", color=colour, label=label)
+        for fkey, style, what in (("fps_view", "o-", "view change"), ("fps_light", "s--", "light change")):
             ys = [p.get(fkey) for p in bp]
             if any(number(y) for y in ys):
                 b.plot(xs, [y if number(y) else float("nan") for y in ys], style, color=colour,
-                       label=f"{backend}, {label}")
+                       label=f"{label}, {what}")
     a.set_xlabel(key)
     a.set_ylabel("storage (MB)")
     a.grid(True, alpha=0.3)

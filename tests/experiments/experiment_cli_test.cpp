@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "support/cli_runner.h"
@@ -53,6 +54,48 @@ TEST_F(ExperimentCli, UnknownSceneIsAClearErrorAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
   const auto t3 = run_cli("experiment table3", dir_, env_);
   EXPECT_NE(t3.exit_code, 0);
+}
+
+TEST_F(ExperimentCli, AllQuickRunsEveryExperimentAndThenSkipsTheCompleteOnes) {
+  // `experiment all --quick` on the tiny scene: both tables (into tables-quick/) and every
+  // experiment file's quick variant, each folder complete; a second call skips them all.
+  const auto out = dir_ / "results";
+  const std::string cmd =
+      "--no-opencl experiment all --quick --scenes tiny-sphere-plane --no-plot --out \"" +
+      out.string() + "\"";
+  const auto r = run_cli(cmd, dir_, env_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"tables-quick/table1.md", "tables-quick/table2.md"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  for (const char* name : {"fig6-quick", "fig8-quick", "pareto-quick", "skip-quick"}) {
+    EXPECT_TRUE(fs::exists(out / name / ".complete")) << name;
+    EXPECT_TRUE(fs::exists(out / name / "README.md")) << name;
+    EXPECT_TRUE(fs::exists(out / name / "points.csv")) << name;
+  }
+  const auto again = run_cli(cmd, dir_, env_);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find("fig6-quick is complete"), std::string::npos) << again.err;
+
+  const auto list = run_cli("experiment list --json", dir_, env_);
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  const auto j = nlohmann::json::parse(list.out);
+  std::vector<std::string> names;
+  for (const auto& e : j.at("experiments")) names.push_back(e.at("name"));
+  for (const char* n : {"fig6", "fig8", "pareto", "skip"})
+    EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+}
+
+TEST_F(ExperimentCli, RunRefusesAMissingFileAndAnUnknownExperiment) {
+  const auto missing = run_cli("experiment run no/such/file.toml", dir_, env_);
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("no such experiment file"), std::string::npos) << missing.err;
+  const auto unknown = run_cli("experiment run fig66", dir_, env_);
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_NE(unknown.err.find("known: "), std::string::npos) << unknown.err;
+  const auto report =
+      run_cli("experiment report \"" + (dir_ / "nothing").string() + "\"", dir_, env_);
+  EXPECT_EQ(report.exit_code, 1);
+  EXPECT_NE(report.err.find("result.json"), std::string::npos) << report.err;
 }
 
 }  // namespace
