@@ -380,6 +380,18 @@ std::string render_experiment_markdown(const json& result, const fs::path& folde
       c.at("points_computed").get<int>(), num(c.at("seconds_computing")),
       c.at("stage_hits").get<int>(), c.at("stage_misses").get<int>());
 
+  if (result.contains("failures") && !result.at("failures").empty()) {
+    md +=
+        "## Failures\n\nThese points did not run (nothing of them is cached; the rest of the "
+        "experiment did):\n\n";
+    for (const auto& f : result.at("failures"))
+      md += fmt::format("- {} {}: {}\n", f.at("scene").get<std::string>(),
+                        f.at("point").get<std::string>().empty()
+                            ? std::string("(the scene)")
+                            : fmt::format("`{}`", f.at("point").get<std::string>()),
+                        f.at("error").get<std::string>());
+    md += "\n";
+  }
   for (const auto& scene : result.at("scenes")) {
     if (e.at("kind") == "equal_storage")
       equal_storage_section(md, result, scene, folder);

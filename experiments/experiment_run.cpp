@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 
 #include "pareto_front.h"
 #include "point_measurement.h"
@@ -226,9 +227,28 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
       throw RunInterrupted(fmt::format("stopped after {} points", done));
   };
 
+  // A point or scene that fails (a backend refusing the scene, a device out of memory) is
+  // recorded and reported; the others still run, and nothing of it is cached.
+  json failures = json::array();
+  const auto fail = [&](const std::string& scene, const std::string& what, const std::string& why) {
+    failures.push_back({{"scene", scene}, {"point", what}, {"error", why}});
+    if (o.on_progress)
+      o.on_progress(
+          fmt::format("warning: {} {} failed: {}", scene, what.empty() ? "(scene)" : what, why));
+  };
+
   for (const auto& variant : variants) {
     report(fmt::format("{}: exact transfer, materials, exact images", variant.name));
-    SceneBench bench = prepare_bench(variant, spec, cache, bo);
+    std::optional<SceneBench> prepared;
+    try {
+      prepared.emplace(prepare_bench(variant, spec, cache, bo));
+    } catch (const RunInterrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      fail(variant.name, "", e.what());
+      continue;
+    }
+    SceneBench& bench = *prepared;
     json scene_info = bench.info;
     if (spec.kind == ExperimentKind::kEqualStorage) {
       std::uint64_t target = 0;
@@ -247,57 +267,62 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
           spec.target.megabytes ? json(nullptr) : json(spec.target.backend);
       std::vector<PointOutcome> outcomes;
       outcomes.reserve(spec.backends.size());
-      for (const auto& backend : spec.backends) {
-        const auto& entry = registry.get(backend);
-        auto params = spec.params.contains(backend) ? spec.params.at(backend)
-                                                    : std::map<std::string, std::string>{};
-        json search = {{"scene", variant.name}, {"backend", backend}, {"target_bytes", target}};
-        if (entry.size_knob && !params.contains(entry.size_knob->key)) {
-          const bool integer = knob_is_int(entry);
-          const auto storage_at = [&](double v) {
-            auto p = params;
-            p[entry.size_knob->key] = format_knob(v, integer);
-            report(fmt::format("{} {}: storage search, {} = {}", variant.name, backend,
-                               entry.size_knob->key, p[entry.size_knob->key]));
-            const CompressionResult cr =
-                compress_cached(backend, p, bench.prepared.input(entry),
-                                bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
-            return cr.compressed->storage().total_bytes();
-          };
-          const StorageSearch s =
-              search_equal_storage(*entry.size_knob, integer, target, spec.target.tolerance,
-                                   spec.target.max_probes, storage_at);
-          params[entry.size_knob->key] = format_knob(s.value, integer);
-          json probes = json::array();
-          for (const auto& p : s.probes) probes.push_back({{"value", p.value}, {"bytes", p.bytes}});
-          search.update({{"knob", entry.size_knob->key},
-                         {"value", params[entry.size_knob->key]},
-                         {"bytes", s.bytes},
-                         {"ratio", s.ratio},
-                         {"reached", s.reached},
-                         {"note", s.note},
-                         {"probes", probes}});
-        } else {
-          search.update({{"knob", entry.size_knob ? json(entry.size_knob->key) : json(nullptr)},
-                         {"reached", nullptr},
-                         {"note", entry.size_knob ? "the experiment fixes the size knob"
-                                                  : "no size knob: its storage is what it is"}});
+      for (const auto& backend : spec.backends) try {
+          const auto& entry = registry.get(backend);
+          auto params = spec.params.contains(backend) ? spec.params.at(backend)
+                                                      : std::map<std::string, std::string>{};
+          json search = {{"scene", variant.name}, {"backend", backend}, {"target_bytes", target}};
+          if (entry.size_knob && !params.contains(entry.size_knob->key)) {
+            const bool integer = knob_is_int(entry);
+            const auto storage_at = [&](double v) {
+              auto p = params;
+              p[entry.size_knob->key] = format_knob(v, integer);
+              report(fmt::format("{} {}: storage search, {} = {}", variant.name, backend,
+                                 entry.size_knob->key, p[entry.size_knob->key]));
+              const CompressionResult cr =
+                  compress_cached(backend, p, bench.prepared.input(entry),
+                                  bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
+              return cr.compressed->storage().total_bytes();
+            };
+            const StorageSearch s =
+                search_equal_storage(*entry.size_knob, integer, target, spec.target.tolerance,
+                                     spec.target.max_probes, storage_at);
+            params[entry.size_knob->key] = format_knob(s.value, integer);
+            json probes = json::array();
+            for (const auto& p : s.probes)
+              probes.push_back({{"value", p.value}, {"bytes", p.bytes}});
+            search.update({{"knob", entry.size_knob->key},
+                           {"value", params[entry.size_knob->key]},
+                           {"bytes", s.bytes},
+                           {"ratio", s.ratio},
+                           {"reached", s.reached},
+                           {"note", s.note},
+                           {"probes", probes}});
+          } else {
+            search.update({{"knob", entry.size_knob ? json(entry.size_knob->key) : json(nullptr)},
+                           {"reached", nullptr},
+                           {"note", entry.size_knob ? "the experiment fixes the size knob"
+                                                    : "no size knob: its storage is what it is"}});
+          }
+          report(fmt::format("{} {}: measuring", variant.name, backend));
+          PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
+          const double bytes = out.record["storage_bytes"].get<double>();
+          const double ratio = bytes / static_cast<double>(target);
+          out.record["role"] = "equal_storage";
+          out.record["target_bytes"] = target;
+          out.record["storage_ratio"] = ratio;
+          out.record["reached"] = std::abs(ratio - 1.0) <= spec.target.tolerance;
+          if (!search.contains("bytes")) search["bytes"] = out.record["storage_bytes"];
+          search["ratio"] = ratio;
+          search["reached"] = out.record["reached"];
+          searches.push_back(search);
+          account(out);
+          outcomes.push_back(std::move(out));
+        } catch (const RunInterrupted&) {
+          throw;
+        } catch (const std::exception& e) {
+          fail(variant.name, backend, e.what());
         }
-        report(fmt::format("{} {}: measuring", variant.name, backend));
-        PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
-        const double bytes = out.record["storage_bytes"].get<double>();
-        const double ratio = bytes / static_cast<double>(target);
-        out.record["role"] = "equal_storage";
-        out.record["target_bytes"] = target;
-        out.record["storage_ratio"] = ratio;
-        out.record["reached"] = std::abs(ratio - 1.0) <= spec.target.tolerance;
-        if (!search.contains("bytes")) search["bytes"] = out.record["storage_bytes"];
-        search["ratio"] = ratio;
-        search["reached"] = out.record["reached"];
-        searches.push_back(search);
-        account(out);
-        outcomes.push_back(std::move(out));
-      }
       if (spec.images) {
         std::vector<PointOutcome*> ptrs;
         for (auto& out : outcomes) ptrs.push_back(&out);
@@ -310,11 +335,17 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
         for (const auto& params : sweep_points(spec, backend)) {
           std::string desc;
           for (const auto& [k, v] : params) desc += fmt::format(" {}={}", k, v);
-          report(fmt::format("{} {}:{}", variant.name, backend, desc));
-          PointOutcome out = measure_point(bench, spec, backend, params, false, cache, bo);
-          out.record["role"] = "sweep";
-          account(out);
-          points.push_back(std::move(out.record));
+          try {
+            report(fmt::format("{} {}:{}", variant.name, backend, desc));
+            PointOutcome out = measure_point(bench, spec, backend, params, false, cache, bo);
+            out.record["role"] = "sweep";
+            account(out);
+            points.push_back(std::move(out.record));
+          } catch (const RunInterrupted&) {
+            throw;
+          } catch (const std::exception& e) {
+            fail(variant.name, backend + desc, e.what());
+          }
         }
     }
     scenes.push_back(std::move(scene_info));
@@ -333,6 +364,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                  {"searches", searches},
                  {"image_sets", image_sets},
                  {"points", points},
+                 {"failures", failures},
                  {"cache",
                   {{"points_from_cache", hits},
                    {"points_computed", computed},

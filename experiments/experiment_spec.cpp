@@ -22,10 +22,10 @@ const std::vector<std::string> kBlenderWorlds = {"city",  "courtyard", "forest",
                                                  "night", "studio",    "sunrise", "sunset"};
 
 const std::set<std::string> kTopKeys = {
-    "name",      "title",   "kind",   "scenes",       "scene_grid",   "backends",
-    "exclude",   "params",  "grid",   "knob_points",  "environments", "views",
-    "image",     "repeats", "timing", "images",       "fps",          "fps_frames",
-    "reference", "target",  "paper",  "paper_source", "variant"};
+    "name",       "title",     "kind",    "scenes",      "scene_grid",   "backends",
+    "exclude",    "params",    "grid",    "knob_points", "environments", "views",
+    "image",      "btf",       "repeats", "timing",      "images",       "fps",
+    "fps_frames", "reference", "target",  "paper",       "paper_source", "variant"};
 
 std::string join(const auto& items) {
   std::string out;
@@ -171,9 +171,17 @@ nlohmann::json evaluation_json(const ExperimentSpec& s) {
          {"file", e.file},
          {"sun_ratio", e.sun_ratio ? nlohmann::json(*e.sun_ratio) : nlohmann::json(nullptr)},
          {"sun_only", e.sun_only}});
-  return {{"environments", envs},    {"views", s.views},     {"width", s.width},
-          {"height", s.height},      {"repeats", s.repeats}, {"timing", s.timing},
-          {"images", s.images},      {"fps", s.fps},         {"fps_frames", s.fps_frames},
+  return {{"environments", envs},
+          {"views", s.views},
+          {"width", s.width},
+          {"height", s.height},
+          {"repeats", s.repeats},
+          {"timing", s.timing},
+          {"images", s.images},
+          {"fps", s.fps},
+          {"fps_frames", s.fps_frames},
+          {"btf_resolution", s.btf_resolution},
+          {"btf_view_side", s.btf_view_side},
           {"reference", s.reference}};
 }
 
@@ -361,6 +369,13 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
     if (const auto* w = (*img)["width"].node()) s.width = int_in(file, *w, "image.width", 8, 8192);
     if (const auto* h = (*img)["height"].node())
       s.height = int_in(file, *h, "image.height", 8, 8192);
+  }
+  if (const auto* btf = table_at(file, t, "btf")) {
+    check_keys(file, *btf, {"resolution", "view_side"}, "btf");
+    if (const auto* r = (*btf)["resolution"].node())
+      s.btf_resolution = int_in(file, *r, "btf.resolution", 1, 1024);
+    if (const auto* v = (*btf)["view_side"].node())
+      s.btf_view_side = int_in(file, *v, "btf.view_side", 1, 64);
   }
   if (const auto* r = t["repeats"].node()) s.repeats = int_in(file, *r, "repeats", 1, 100000);
   if (const auto* v = t["timing"].node()) s.timing = scalar<bool>(file, *v, "timing");

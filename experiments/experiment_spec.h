@@ -62,6 +62,11 @@ struct ExperimentSpec {
   std::vector<std::string> views;  ///< scene view presets; empty: the scene's first
   int width = 256;
   int height = 192;
+  /// The synthetic BTFs the frame loop shades with (texels per side, view_side^2 views); the
+  /// light side is always the scene's local grid. Large local grids need fewer texels: the raw
+  /// BTF holds texels^2 x views x M floats per colour.
+  int btf_resolution = 32;
+  int btf_view_side = 12;
   int repeats = 10;                        ///< timed relights per point (median)
   bool timing = true;                      ///< false: no timings (deterministic results, for tests)
   bool images = true;                      ///< render images and image errors

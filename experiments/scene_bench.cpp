@@ -103,7 +103,10 @@ SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec
         fmt::format("scene '{}': the built mesh has {} vertices but its cached transfer "
                     "has {} (stale stage cache? rerun with --recompute)",
                     desc.name, b.scene.mesh.positions.size(), t.vertex_count()));
-  b.materials = load_scene_materials(desc, BtfParams{}, cache, "full", {}, o.show_progress);
+  BtfParams btf;
+  btf.resolution = spec.btf_resolution;
+  btf.view_side = spec.btf_view_side;
+  b.materials = load_scene_materials(desc, btf, cache, "full", {}, o.show_progress);
   const std::vector<std::string> views =
       spec.views.empty() ? std::vector<std::string>{""} : spec.views;
   CameraOverrides size;
