@@ -110,9 +110,9 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
   md +=
       "| backend | parameters | storage MB | / target | reached | compress s | MFLOPs | "
       "relight ms C++ | relight ms OpenCL | L* rel. L2 mean | L* rel. L2 max | Frobenius rel. | "
-      "image rel. L2 | PSNR dB |";
+      "Frobenius SE | image rel. L2 | PSNR dB |";
   if (!ssim.empty()) md += " SSIM |";
-  md += " paper |\n|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
+  md += " paper |\n|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
   if (!ssim.empty()) md += "---:|";
   md += "---|\n";
   for (const json* p : points_of(result, name)) {
@@ -127,14 +127,15 @@ void equal_storage_section(std::string& md, const json& result, const json& scen
       ssim_cell = n ? fmt::format("{:.4f}", sum / n) : "n/a";
     }
     md += fmt::format(
-        "| `{}` | {} | {:.3f} | {:.3f} | {} | {} | {:.2f} | {} | {} | {} | {} | {} | {} | {} |",
+        "| `{}` | {} | {:.3f} | {:.3f} | {} | {} | {:.2f} | {} | {} | {} | {} | {} | {} | {} | {} "
+        "|",
         backend, params_cell(p->at("params")), num(p->at("storage_bytes")) / 1e6,
         num(p->at("storage_ratio")), p->at("reached").get<bool>() ? "yes" : "**no**",
         fmt_num(p->at("compress_seconds"), "{:.2f}"), num(p->at("flops_per_relight")) / 1e6,
         fmt_ms(p->at("relight_ms_cpp")), fmt_ms(p->at("relight_ms_opencl")),
         fmt_err(p->at("lstar_rel_l2_mean")), fmt_err(p->at("lstar_rel_l2_max")),
-        fmt_err(p->at("frobenius_rel")), fmt_err(p->at("image_rel_l2_mean")),
-        fmt_num(p->at("image_psnr_db_mean"), "{:.1f}"));
+        fmt_err(p->at("frobenius_rel")), fmt_err(p->value("frobenius_se", json(nullptr))),
+        fmt_err(p->at("image_rel_l2_mean")), fmt_num(p->at("image_psnr_db_mean"), "{:.1f}"));
     if (!ssim.empty()) md.append(" ").append(ssim_cell).append(" |");
     md.append(" ").append(paper_cell(result, backend)).append(" |\n");
   }

@@ -24,7 +24,7 @@ namespace {
 using json = nlohmann::json;
 
 // Bump when a point's record changes meaning or layout: cached points are then recomputed.
-constexpr std::uint32_t kPointVersion = 4;
+constexpr std::uint32_t kPointVersion = 5;
 constexpr const char* kPointKind = "experiment-point";
 
 json null_if_nan(double v) {
@@ -75,6 +75,8 @@ const std::vector<std::string>& point_record_columns() {
                                                    "lstar_rel_l2_max",
                                                    "frobenius_rel",
                                                    "frobenius_stderr",
+                                                   "frobenius_se",
+                                                   "frobenius_exact",
                                                    "max_vertex_rel",
                                                    "image_rel_l2_mean",
                                                    "image_rel_l2_max",
@@ -181,6 +183,10 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     r["lstar_rel_l2_max"] = ev.max_rel_l2;
     r["frobenius_rel"] = ev.frobenius.relative;
     r["frobenius_stderr"] = ev.frobenius.standard_error;
+    r["frobenius_exact"] = ev.frobenius.exact;
+    // The squared error ||T~ - T||_F^2 the CPCA and SRBF papers report as SE.
+    r["frobenius_se"] =
+        ev.frobenius.relative * ev.frobenius.relative * b.info.at("frobenius_sq").get<double>();
     r["max_vertex_rel"] = ev.max_vertex_rel;
 
     json errors = json::array();

@@ -85,6 +85,13 @@ SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec
             {"M", t.local_count()},
             {"N", t.cols()},
             {"nnz", t.nnz()},
+            {"frobenius_sq",
+             [&] {
+               // ||T||_F^2, in double: turns a relative Frobenius error into the papers' SE.
+               double sq = 0;
+               for (std::size_t i = 0; i < t.nnz(); ++i) sq += double(t.value(i)) * t.value(i);
+               return sq;
+             }()},
             {"transfer_seconds", b.prepared.transfer.result.stats.seconds_total},
             {"transfer_cache_hit", b.prepared.transfer.cache_hit},
             {"transfer_key", b.prepared.transfer.key.hex()}};

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -123,6 +124,22 @@ tolerance = 0.05
     at_keep += static_cast<std::uint64_t>(std::ceil(keep * static_cast<double>(n)));
   }
   EXPECT_EQ(p.at("storage_bytes").get<std::uint64_t>(), 12 * at_keep);
+  // SE = ||T~ - T||_F^2 is the squared norm of the entries coo drops: each row's smallest
+  // n - ceil(keep n) values (ties are equal values, so which of them go does not matter).
+  double dropped_sq = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    std::vector<double> v;
+    for (auto i = t.row_offsets()[r]; i < t.row_offsets()[r + 1]; ++i) v.push_back(t.value(i));
+    std::sort(v.begin(), v.end(), std::greater<>());
+    const auto kept = static_cast<std::size_t>(std::ceil(keep * static_cast<double>(v.size())));
+    for (std::size_t q = kept; q < v.size(); ++q) dropped_sq += v[q] * v[q];
+  }
+  // The relative error is exact or Hutchinson's estimate (then within three standard errors).
+  const double rel = p.at("frobenius_rel").get<double>();
+  const double se_stderr =
+      2 * rel * p.at("frobenius_stderr").get<double>() * dropped_sq / (rel * rel);
+  EXPECT_NEAR(p.at("frobenius_se").get<double>(), dropped_sq, 3 * se_stderr + 1e-6 * dropped_sq);
+  EXPECT_EQ(p.at("frobenius_exact").get<bool>(), p.at("frobenius_stderr").get<double>() == 0);
   const json& search = s.result.at("searches")[0];
   EXPECT_TRUE(search.at("reached").get<bool>());
   EXPECT_LE(search.at("probes").size(), 14u);
