@@ -67,3 +67,43 @@ __kernel PRT_WG_ATTR void csr_quantized_u8(const uint rows, __global const uint*
   CSR_QUANTIZED_ROW_SUM(CSR_QUANTIZED_U8);
   prt_store_rgb3(out, row, sum * row_scales[row]);
 }
+
+// ---- a vertex subset (the frame loop's culling, docs/rendering.md "Culling") ----
+//
+// The rows of the vertices in vertex_ids only: work-item i sums row vertex_ids[i / dim] * dim +
+// i % dim with the full kernels' row loop, so those rows get their bits; other rows of `out`
+// are not written.
+#define CSR_QUANTIZED_SUBSET_ROW()                      \
+  const uint item = get_global_id(0);                   \
+  PRT_GUARD(item, subset_rows);                         \
+  const uint row = vertex_ids[item / dim] * dim + item % dim
+
+__kernel PRT_WG_ATTR void csr_quantized_f32_vertices(
+    const uint subset_rows, const uint dim, __global const uint* restrict vertex_ids,
+    __global const uint* restrict offsets, __global const PRT_COLUMN_T* restrict columns,
+    __global const float* restrict values, __global const float4* restrict light,
+    __global float* restrict out) {
+  CSR_QUANTIZED_SUBSET_ROW();
+  CSR_QUANTIZED_ROW_SUM(CSR_QUANTIZED_F32);
+  prt_store_rgb3(out, row, sum);
+}
+
+__kernel PRT_WG_ATTR void csr_quantized_f16_vertices(
+    const uint subset_rows, const uint dim, __global const uint* restrict vertex_ids,
+    __global const uint* restrict offsets, __global const PRT_COLUMN_T* restrict columns,
+    __global const half* restrict values, __global const float4* restrict light,
+    __global float* restrict out) {
+  CSR_QUANTIZED_SUBSET_ROW();
+  CSR_QUANTIZED_ROW_SUM(CSR_QUANTIZED_F16);
+  prt_store_rgb3(out, row, sum);
+}
+
+__kernel PRT_WG_ATTR void csr_quantized_u8_vertices(
+    const uint subset_rows, const uint dim, __global const uint* restrict vertex_ids,
+    __global const uint* restrict offsets, __global const PRT_COLUMN_T* restrict columns,
+    __global const uchar* restrict codes, __global const float* restrict row_scales,
+    __global const float4* restrict light, __global float* restrict out) {
+  CSR_QUANTIZED_SUBSET_ROW();
+  CSR_QUANTIZED_ROW_SUM(CSR_QUANTIZED_U8);
+  prt_store_rgb3(out, row, sum * row_scales[row]);
+}

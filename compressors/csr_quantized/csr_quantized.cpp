@@ -104,6 +104,18 @@ void CsrQuantizedTransfer::relight(const LightCoeffs& light, LocalRadiance& out)
   relight_quantized(q_, light.values, out.values);
 }
 
+void CsrQuantizedTransfer::relight_vertices(const LightCoeffs& light,
+                                            std::span<const std::uint32_t> vertices,
+                                            LocalRadiance& out) const {
+  check_pixel_light(light, static_cast<std::size_t>(q_.pixel_count), kName);
+  check_vertex_subset(vertices, q_.vertices, kName);
+  if (out.basis != RadianceBasis::kPixel || out.dim != q_.local_count ||
+      out.vertices != q_.vertices || out.values.size() != q_.rows()) {
+    out = LocalRadiance(RadianceBasis::kPixel, q_.local_count, q_.vertices);
+  }
+  relight_quantized_vertices(q_, light.values, vertices, out.values);
+}
+
 std::unique_ptr<DeviceRelighter> CsrQuantizedTransfer::upload(ClContext& context,
                                                               const ParamSet&) const {
   return upload_quantized(context, q_);

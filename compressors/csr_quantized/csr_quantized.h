@@ -62,6 +62,10 @@ QuantizedCsr quantize(const TransferMatrix& t, ValueFormat format);
 
 /// out = T~ light (TBB over rows; four accumulators per row, summed as the kernel sums).
 void relight_quantized(const QuantizedCsr& q, std::span<const Rgb> light, std::span<Rgb> out);
+/// The rows vertex * M .. vertex * M + M - 1 of out = T~ light for the given vertices (sorted,
+/// unique, checked by the caller), with relight_quantized's bits; other rows are not written.
+void relight_quantized_vertices(const QuantizedCsr& q, std::span<const Rgb> light,
+                                std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
 class CsrQuantizedTransfer final : public CompressedTransfer {
  public:
@@ -80,6 +84,10 @@ class CsrQuantizedTransfer final : public CompressedTransfer {
   std::optional<double> expected_frobenius_error() const override { return q_.frobenius_error; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
+  /// Relights the listed vertices' rows only (no cube-face skipping).
+  bool supports_vertex_subset() const override { return true; }
+  void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
+                        LocalRadiance& out) const override;
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,
                                           const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;

@@ -35,6 +35,7 @@ class CsrQuantizedDevice final : public DeviceRelighter {
         cols_(static_cast<std::size_t>(q.pixel_count)),
         dim_(q.local_count),
         vertices_(q.vertices),
+        format_(q.format),
         light_host_(cols_),
         launch_name_(fmt::format("csr_quantized.{}", to_string(q.format))) {
     if (rows_ > std::numeric_limits<std::uint32_t>::max())
@@ -45,6 +46,8 @@ class CsrQuantizedDevice final : public DeviceRelighter {
         .set("PRT_COLUMN_T", q.narrow_columns() ? "ushort" : "uint");
     const cl::Program program = build_program(ctx, "csr_quantized", defines);
     kernel_ = make_kernel(program, std::string(kernel_name(q.format)));
+    vertices_kernel_ = make_kernel(program, std::string(kernel_name(q.format)) + "_vertices");
+    subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "csr_quantized vertex subset");
 
     offsets_ = upload(ctx, std::span<const std::uint32_t>(q.offsets), "csr_quantized row offsets");
     if (q.narrow_columns()) {
@@ -75,6 +78,40 @@ class CsrQuantizedDevice final : public DeviceRelighter {
                  : buffer_bytes({&offsets_, &columns_, &values_, &light_, &out_});
   }
 
+  bool supports_vertex_subset() const override { return true; }
+
+  void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
+    check_vertex_subset(vertices, vertices_, kName);
+    subset_count_ = vertices.size();
+    if (vertices.size_bytes() > subset_capacity_) {
+      subset_capacity_ = vertices.size_bytes();
+      subset_ =
+          make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "csr_quantized vertex subset");
+    }
+    if (!vertices.empty())
+      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(),
+                   "csr_quantized vertex subset");
+  }
+
+  double relight_subset_on_device(const LightCoeffs& light) override {
+    check_pixel_light(light, cols_, kName);
+    upload_light(ctx_, light_, light.values, light_host_, "csr_quantized light");
+    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    if (subset_rows == 0) return 0.0;  // OpenCL forbids an empty launch
+    const auto count = static_cast<cl_uint>(subset_rows);
+    const auto dim = static_cast<cl_uint>(dim_);
+    if (format_ == ValueFormat::kU8) {
+      set_args(vertices_kernel_, count, dim, subset_, offsets_, columns_, values_, scales_, light_,
+               out_);
+    } else {
+      set_args(vertices_kernel_, count, dim, subset_, offsets_, columns_, values_, light_, out_);
+    }
+    const std::string name = launch_name_ + ".vertices";
+    cl::Event event =
+        launch(ctx_, name, vertices_kernel_, LaunchRange::linear(subset_rows, kWorkGroup));
+    return event_milliseconds(event, ctx_.info().device_name, "timing of kernel " + name);
+  }
+
   double relight_on_device(const LightCoeffs& light) override {
     check_pixel_light(light, cols_, kName);
     upload_light(ctx_, light_, light.values, light_host_, "csr_quantized light");
@@ -101,11 +138,16 @@ class CsrQuantizedDevice final : public DeviceRelighter {
   std::size_t rows_, cols_;
   int dim_;
   std::size_t vertices_;
+  ValueFormat format_;
   std::vector<cl_float4> light_host_;
   std::string launch_name_;
   cl::Kernel kernel_;
   cl::Buffer offsets_, columns_, values_, scales_, light_, out_;
   std::uint64_t bytes_ = 0;
+  // The vertex subset relit by relight_subset_on_device().
+  cl::Kernel vertices_kernel_;
+  cl::Buffer subset_;
+  std::size_t subset_count_ = 0, subset_capacity_ = 0;
 };
 
 }  // namespace

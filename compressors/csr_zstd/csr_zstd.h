@@ -2,7 +2,8 @@
 // Backend `csr_zstd`: the exact CSR of `uncompressed` (u32 row offsets, u16 or u32 columns, u8
 // counts times 1/s^2) compressed with zstd, in frames of `block_rows` rows that are compressed
 // and decompressed independently (compressors/csr_zstd/README.md). Every relight decompresses
-// every frame: the relight time is what general-purpose compression costs.
+// every frame it needs (all of them, or those holding a row of a vertex subset): the relight
+// time is what general-purpose compression costs.
 //
 // Parameters: `level` (zstd level 1..19, the size knob) and `block_rows` (rows per frame).
 #include <cstdint>
@@ -81,6 +82,16 @@ class FrameDecoder {
   std::unique_ptr<Impl> impl_;
 };
 
+/// A frame a vertex subset needs, and the subset's vertices [vertex_begin, vertex_end) that have
+/// a row in it.
+struct FrameTask {
+  std::size_t frame = 0;
+  std::size_t vertex_begin = 0, vertex_end = 0;
+};
+/// The frames holding a row of `vertices` (sorted, unique, checked by the caller), increasing.
+/// A vertex whose rows straddle a frame boundary is listed in both frames.
+std::vector<FrameTask> frame_tasks(const FramedCsr& csr, std::span<const std::uint32_t> vertices);
+
 /// The exact T back from every frame (validated by TransferMatrix::from_csr: ParameterError).
 TransferMatrix decompress_all(const FramedCsr& csr);
 
@@ -99,6 +110,10 @@ class CsrZstdTransfer final : public CompressedTransfer {
   LightCoeffs project_light(const Cubemap& radiance) const override;
   /// Decompresses every frame (TBB over frames, one scratch buffer per thread) and multiplies.
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
+  /// Decompresses only the frames holding a row of `vertices` and relights those rows.
+  bool supports_vertex_subset() const override { return true; }
+  void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
+                        LocalRadiance& out) const override;
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,
                                           const ParamSet& device_options) const override;
   void save(ArchiveWriter& archive) const override;

@@ -17,6 +17,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/numeric/float16.h"
+#include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
@@ -313,6 +314,95 @@ TEST(CsrQuantized, OpenClMatchesTheCppRelight) {
       ct->relight({"pixel", light}, cpp);
       device->relight({"pixel", light}, gpu);
       EXPECT_LE(max_relative_error(gpu, cpp), 1e-5);
+    }
+  }
+}
+
+// Rows of `subset` are `want`'s bit for bit, every other row `other`'s.
+::testing::AssertionResult rows_are(const LocalRadiance& out, const LocalRadiance& want,
+                                    const LocalRadiance& other,
+                                    const std::vector<std::uint32_t>& subset) {
+  std::vector<bool> in(out.vertices, false);
+  for (const std::uint32_t v : subset) in[v] = true;
+  if (out.values.size() != want.values.size() || out.values.size() != other.values.size())
+    return ::testing::AssertionFailure() << "sizes differ";
+  for (std::size_t r = 0; r < out.values.size(); ++r) {
+    const LocalRadiance& ref = in[r / static_cast<std::size_t>(out.dim)] ? want : other;
+    if (std::memcmp(&out.values[r], &ref.values[r], sizeof(Rgb)) != 0)
+      return ::testing::AssertionFailure()
+             << "row " << r << ": " << out.values[r].x << " vs " << ref.values[r].x;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Vertices 0, 3, 4 (empty) and 6 (the last): the subset relight writes the full relight's bits
+// there and nothing elsewhere; an `out` of the wrong shape comes back zero elsewhere; unsorted,
+// repeated or out-of-range vertices are refused.
+TEST(CsrQuantized, VertexSubsetRowsAreTheFullRelightsBits) {
+  const TransferMatrix t = test_transfer();
+  const std::vector<std::uint32_t> subset{0, 3, 4, 6};
+  const std::vector<Rgb> light = test_light(t.cols(), 9);
+  for (ValueFormat f : kFormats) {
+    SCOPED_TRACE(std::string(to_string(f)));
+    const auto ct = compress(t, f);
+    ASSERT_TRUE(ct->supports_vertex_subset());
+    LocalRadiance full;
+    ct->relight({"pixel", light}, full);
+    LocalRadiance before = full;
+    std::fill(before.values.begin(), before.values.end(), Rgb(-7.f));
+    LocalRadiance out = before;
+    ct->relight_vertices({"pixel", light}, subset, out);
+    EXPECT_TRUE(rows_are(out, full, before, subset));
+    LocalRadiance fresh;
+    ct->relight_vertices({"pixel", light}, subset, fresh);
+    LocalRadiance zero = full;
+    std::fill(zero.values.begin(), zero.values.end(), Rgb(0.f));
+    EXPECT_TRUE(rows_are(fresh, full, zero, subset));
+    for (const std::vector<std::uint32_t>& bad :
+         {std::vector<std::uint32_t>{3, 1}, std::vector<std::uint32_t>{2, 2},
+          std::vector<std::uint32_t>{7}}) {
+      EXPECT_THROW(ct->relight_vertices({"pixel", light}, bad, out), ParameterError);
+    }
+  }
+}
+
+// csr_quantized_*_vertices against the C++ subset relight, for each format and both column
+// widths; rows outside the subset keep the previous light's values on the device.
+TEST(CsrQuantized, OpenClSubsetKernelMatchesTheCppSubset) {
+  ClContext* ctx = default_context();
+  if (ctx == nullptr) GTEST_SKIP() << "no OpenCL device";
+  for (const TransferMatrix& t :
+       {test_transfer(), random_transfer(13, RandomTransferSpec{3, 2, 128, 3, 0.004, {}})}) {
+    const std::vector<std::uint32_t> subset =
+        t.vertex_count() == 7 ? std::vector<std::uint32_t>{1, 4, 6} : std::vector<std::uint32_t>{2};
+    const std::vector<Rgb> first = test_light(t.cols(), 4), second = test_light(t.cols(), 5);
+    for (ValueFormat f : kFormats) {
+      SCOPED_TRACE(fmt::format("{}, N = {}", to_string(f), t.cols()));
+      const auto ct = compress(t, f);
+      auto device = upload_compressed(*ct, *ctx);
+      ASSERT_NE(device, nullptr);
+      ASSERT_TRUE(device->supports_vertex_subset());
+      LocalRadiance before, cpp, gpu;
+      device->relight({"pixel", first}, before);
+      ct->relight_vertices({"pixel", second}, subset, cpp);
+      device->set_vertex_subset(subset);
+      EXPECT_GE(device->relight_subset_on_device({"pixel", second}), 0.0);
+      gpu = before;
+      download(*ctx, device->output_buffer(), std::span<Rgb>(gpu.values), "subset");
+      std::vector<bool> in(t.vertex_count(), false);
+      for (const std::uint32_t v : subset) in[v] = true;
+      const auto m = static_cast<std::size_t>(t.local_count());
+      for (std::size_t r = 0; r < gpu.values.size(); ++r) {
+        if (in[r / m]) {
+          for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(gpu.values[r][c], cpp.values[r][c], 1e-5 * std::abs(cpp.values[r][c]))
+                << "row " << r;
+        } else {
+          EXPECT_EQ(std::memcmp(&gpu.values[r], &before.values[r], sizeof(Rgb)), 0)
+              << "row " << r << " outside the subset changed";
+        }
+      }
+      EXPECT_THROW(device->set_vertex_subset(std::vector<std::uint32_t>{2, 1}), ParameterError);
     }
   }
 }

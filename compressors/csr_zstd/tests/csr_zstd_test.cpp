@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <zstd.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/exact_relight.h"
@@ -172,6 +174,98 @@ TEST(CsrZstd, OpenClMatchesTheCppRelight) {
       const double ms = device->relight({"pixel", light}, gpu);
       EXPECT_GT(ms, 0.0) << "decompression + upload + kernel take time";
       EXPECT_LE(max_relative_error(gpu, cpp), 1e-5);
+    }
+  }
+}
+
+// M = 16 and 24-row frames: vertices straddle frame boundaries.
+TEST(CsrZstd, FrameTasksAreTheFramesHoldingTheSubsetsRows) {
+  const auto ct = compress(test_transfer(), 3, 24);
+  const std::vector<std::uint32_t> subset{0, 2, 3, 10};
+  const std::vector<FrameTask> tasks = frame_tasks(frames(*ct), subset);
+  // Rows 0..15 (frame 0), 32..47 (frame 1), 48..63 (frame 2), 160..175 (frames 6 and 7).
+  const std::vector<std::array<std::size_t, 3>> want{
+      {0, 0, 1}, {1, 1, 2}, {2, 2, 3}, {6, 3, 4}, {7, 3, 4}};
+  ASSERT_EQ(tasks.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_EQ(tasks[i].frame, want[i][0]) << i;
+    EXPECT_EQ(tasks[i].vertex_begin, want[i][1]) << i;
+    EXPECT_EQ(tasks[i].vertex_end, want[i][2]) << i;
+  }
+  EXPECT_TRUE(frame_tasks(frames(*ct), {}).empty());
+}
+
+// The subset relight writes the full relight's bits on the subset's rows and nothing elsewhere,
+// and decompresses only the frames holding them: with frame 4 (rows 96..119, vertices 6 and 7)
+// destroyed, a subset avoiding it still relights, one touching it fails. Bad subsets are refused.
+TEST(CsrZstd, VertexSubsetDecompressesOnlyItsFramesAndHasTheFullBits) {
+  const TransferMatrix t = test_transfer();
+  const auto ct = compress(t, 3, 24);
+  const std::vector<Rgb> light = test_light(t.cols(), 5);
+  LocalRadiance full;
+  ct->relight({"pixel", light}, full);
+  FramedCsr broken = frames(*ct);
+  std::fill(broken.frames.begin() + static_cast<std::ptrdiff_t>(broken.frame_offsets[4]),
+            broken.frames.begin() + static_cast<std::ptrdiff_t>(broken.frame_offsets[5]),
+            std::uint8_t{0});
+  const CsrZstdTransfer partial(std::move(broken));
+  const std::vector<std::uint32_t> subset{0, 2, 3, 5, 10};
+  std::vector<bool> in(t.vertex_count(), false);
+  for (const std::uint32_t v : subset) in[v] = true;
+  LocalRadiance out = full;
+  std::fill(out.values.begin(), out.values.end(), Rgb(-7.f));
+  partial.relight_vertices({"pixel", light}, subset, out);
+  for (std::size_t r = 0; r < out.values.size(); ++r) {
+    const Rgb want = in[r / 16] ? full.values[r] : Rgb(-7.f);
+    EXPECT_EQ(std::memcmp(&out.values[r], &want, sizeof(Rgb)), 0) << "row " << r;
+  }
+  EXPECT_THROW(partial.relight_vertices({"pixel", light}, std::vector<std::uint32_t>{6}, out),
+               ParameterError);
+  for (const std::vector<std::uint32_t>& bad :
+       {std::vector<std::uint32_t>{3, 1}, std::vector<std::uint32_t>{2, 2},
+        std::vector<std::uint32_t>{11}}) {
+    EXPECT_THROW(ct->relight_vertices({"pixel", light}, bad, out), ParameterError);
+  }
+}
+
+// csr_zstd_vertices against the C++ subset relight on a fresh upload (only the subset's frames
+// ever reach the device), and after a full relight (rows outside the subset keep its values).
+TEST(CsrZstd, OpenClSubsetKernelMatchesTheCppSubset) {
+  ClContext* ctx = default_context();
+  if (ctx == nullptr) GTEST_SKIP() << "no OpenCL device";
+  for (const TransferMatrix& t : {test_transfer(), wide_transfer()}) {
+    SCOPED_TRACE(fmt::format("N = {}", t.cols()));
+    const auto ct = compress(t, 3, 24);
+    const std::vector<std::uint32_t> subset = t.vertex_count() == 11
+                                                  ? std::vector<std::uint32_t>{0, 2, 3, 5, 10}
+                                                  : std::vector<std::uint32_t>{1, 3};
+    std::vector<bool> in(t.vertex_count(), false);
+    for (const std::uint32_t v : subset) in[v] = true;
+    const auto m = static_cast<std::size_t>(t.local_count());
+    const std::vector<Rgb> first = test_light(t.cols(), 1), second = test_light(t.cols(), 2);
+    LocalRadiance cpp;
+    ct->relight_vertices({"pixel", second}, subset, cpp);
+    for (const bool after_full : {false, true}) {
+      SCOPED_TRACE(after_full ? "after a full relight" : "fresh upload");
+      auto device = upload_compressed(*ct, *ctx);
+      ASSERT_NE(device, nullptr);
+      ASSERT_TRUE(device->supports_vertex_subset());
+      LocalRadiance before(RadianceBasis::kPixel, t.local_count(), t.vertex_count());
+      if (after_full) device->relight({"pixel", first}, before);
+      device->set_vertex_subset(subset);
+      EXPECT_GT(device->relight_subset_on_device({"pixel", second}), 0.0);
+      LocalRadiance gpu = before;
+      download(*ctx, device->output_buffer(), std::span<Rgb>(gpu.values), "subset");
+      for (std::size_t r = 0; r < gpu.values.size(); ++r) {
+        if (in[r / m]) {
+          for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(gpu.values[r][c], cpp.values[r][c], 1e-5 * std::abs(cpp.values[r][c]))
+                << "row " << r;
+        } else if (after_full) {
+          EXPECT_EQ(std::memcmp(&gpu.values[r], &before.values[r], sizeof(Rgb)), 0)
+              << "row " << r << " outside the subset changed";
+        }
+      }
     }
   }
 }
