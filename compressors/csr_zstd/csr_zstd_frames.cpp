@@ -31,6 +31,8 @@ std::vector<std::uint8_t> raw_frame(const TransferMatrix& t, std::size_t r0, std
   std::uint8_t* p = raw.data();
   std::memcpy(p, offsets.data() + r0, 4 * (r1 - r0 + 1));
   p += 4 * (r1 - r0 + 1);
+  // An empty T has null column and count arrays: memcpy must not see them, even for 0 bytes.
+  if (n == 0) return raw;
   if (t.narrow_columns()) {
     std::memcpy(p, t.columns16().data() + e0, 2 * n);
   } else {

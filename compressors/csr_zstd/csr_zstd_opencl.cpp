@@ -139,6 +139,8 @@ class CsrZstdDevice final : public DeviceRelighter {
     const std::size_t column_bytes = csr_->column_bytes();
     const std::size_t entries = v.entry_end - v.entry_begin;
     std::memcpy(offsets_host_.data() + v.row_begin, v.offsets, 4 * (v.row_end - v.row_begin));
+    // A frame without entries may have null column and count pointers (memcpy must not see them).
+    if (entries == 0) return;
     const void* columns = v.columns16 != nullptr ? static_cast<const void*>(v.columns16)
                                                  : static_cast<const void*>(v.columns32);
     std::memcpy(columns_host_.data() + column_bytes * v.entry_begin, columns,
