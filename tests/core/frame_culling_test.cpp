@@ -17,6 +17,7 @@
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/render/visible_vertices.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "support/tiny_frame_scene.h"
 
 namespace prt {
 namespace {
@@ -28,42 +29,16 @@ Cubemap black_faces(Cubemap c, std::initializer_list<int> faces) {
 }
 
 struct Fixture {
-  Scene scene =
-      load_scene(std::filesystem::path(PRTLAB_SOURCE_DIR) / "scenes/tiny-sphere-plane.toml");
+  const testing::TinyFrameScene& tiny = testing::tiny_frame_scene();
+  const Scene& scene = tiny.scene;
   std::map<std::string, std::shared_ptr<const CompressedTransfer>> transfers;
-  ShadingMaterials materials;
+  const ShadingMaterials& materials = tiny.materials;
   std::vector<Camera> cameras;  // front, top, from behind, a close-up
-  Cubemap sky = SunSky{}.to_cubemap(8, 2);
-  Cubemap sky2 = [] {
-    SunSky s;
-    s.sun_dir = {-0.6, 0.4, -0.2};
-    s.sun = Rgb(900.f, 1200.f, 1500.f);
-    return s.to_cubemap(8, 2);
-  }();
+  const Cubemap& sky = tiny.sky;
+  const Cubemap& sky2 = tiny.sky2;
 
   Fixture() {
-    const auto& d = scene.desc;
-    TransferParams tp;
-    tp.cubemap_resolution = d.cubemap_resolution;
-    tp.local_grid = d.local_grid;
-    tp.supersampling = d.supersampling;
-    tp.show_progress = false;
-    const TransferMatrix t = compute_transfer(scene.mesh, tp).transfer;
-    const CubemapLayout layout(d.cubemap_resolution);
-    const HemisphereGrid grid(d.local_grid);
-    for (const char* b : {"uncompressed", "bicluster"})
-      transfers[b] = CompressorRegistry::instance().create(b, {})->compress(
-          {t, nullptr, layout, grid}, Progress::null());
-    BtfParams p;
-    p.resolution = 8;
-    p.view_side = 6;
-    p.light_side = d.local_grid;
-    p.supersampling = 1;
-    p.geometry_grid = 64;
-    std::vector<std::shared_ptr<const Btf>> btfs;
-    for (const auto& part : d.parts)
-      btfs.push_back(std::make_shared<const Btf>(generate_btf(make_btf_material(part.btf, 64), p)));
-    materials.part_material = compress_part_materials(btfs, "full", {});
+    for (const char* b : {"uncompressed", "bicluster"}) transfers[b] = tiny.compress(b);
     CameraOverrides size;
     size.width = 64;
     size.height = 48;

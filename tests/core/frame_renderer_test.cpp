@@ -15,6 +15,7 @@
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "support/tiny_frame_scene.h"
 
 namespace prt {
 namespace {
@@ -31,47 +32,19 @@ double max_error_vs_image_max(const RgbImage& a, const RgbImage& b) {
 }
 
 struct Fixture {
-  Scene scene =
-      load_scene(std::filesystem::path(PRTLAB_SOURCE_DIR) / "scenes/tiny-sphere-plane.toml");
-  std::shared_ptr<const CompressedTransfer> transfer, sh_transfer;
-  ShadingMaterials materials;
+  const testing::TinyFrameScene& tiny = testing::tiny_frame_scene();
+  const Scene& scene = tiny.scene;
+  std::shared_ptr<const CompressedTransfer> transfer = tiny.compress("uncompressed");
+  // Relights into SH of order 4: 16 coefficients for M = 16 cells, so nothing is lost, but
+  // every frame goes through the conversion to the bins.
+  std::shared_ptr<const CompressedTransfer> sh_transfer =
+      tiny.compress("sh_probe", {{"order", "4"}});
+  const ShadingMaterials& materials = tiny.materials;
   Camera front, top;
-  Cubemap sky = SunSky{}.to_cubemap(8, 2);
-  Cubemap sky2 = [] {
-    SunSky s;
-    s.sun_dir = {-0.6, 0.4, -0.2};
-    s.sun = Rgb(900.f, 1200.f, 1500.f);
-    return s.to_cubemap(8, 2);
-  }();
+  const Cubemap& sky = tiny.sky;
+  const Cubemap& sky2 = tiny.sky2;
 
   Fixture() {
-    const auto& d = scene.desc;
-    TransferParams tp;
-    tp.cubemap_resolution = d.cubemap_resolution;
-    tp.local_grid = d.local_grid;
-    tp.supersampling = d.supersampling;
-    tp.show_progress = false;
-    const TransferMatrix t = compute_transfer(scene.mesh, tp).transfer;
-    const CubemapLayout layout(d.cubemap_resolution);
-    const HemisphereGrid grid(d.local_grid);
-    transfer = CompressorRegistry::instance()
-                   .create("uncompressed", {})
-                   ->compress({t, nullptr, layout, grid}, Progress::null());
-    // Relights into SH of order 4: 16 coefficients for M = 16 cells, so nothing is lost, but
-    // every frame goes through the conversion to the bins.
-    sh_transfer = CompressorRegistry::instance()
-                      .create("sh_probe", {{"order", "4"}})
-                      ->compress({t, nullptr, layout, grid}, Progress::null());
-    BtfParams p;
-    p.resolution = 8;
-    p.view_side = 6;
-    p.light_side = d.local_grid;
-    p.supersampling = 1;
-    p.geometry_grid = 64;
-    std::vector<std::shared_ptr<const Btf>> btfs;
-    for (const auto& part : d.parts)
-      btfs.push_back(std::make_shared<const Btf>(generate_btf(make_btf_material(part.btf, 64), p)));
-    materials.part_material = compress_part_materials(btfs, "full", {});
     CameraOverrides size;
     size.width = 80;
     size.height = 60;

@@ -17,6 +17,7 @@
 #include "prtlab/render/btf_shading.h"
 #include "prtlab/storage/archive.h"
 #include "support/temp_dir.h"
+#include "support/tiny_frame_scene.h"
 
 namespace prt::full {
 namespace {
@@ -32,14 +33,7 @@ struct Tiny {
   LocalRadiance radiance;
 
   Tiny() {
-    BtfParams p;
-    p.resolution = 8;
-    p.view_side = 6;
-    p.light_side = scene.desc.local_grid;
-    p.supersampling = 1;
-    p.geometry_grid = 64;
-    for (const auto& part : scene.desc.parts)
-      btfs.push_back(std::make_shared<const Btf>(generate_btf(make_btf_material(part.btf, 64), p)));
+    btfs = prt::testing::tiny_scene_btfs(scene);
     materials.part_material = compress_part_materials(btfs, "full", {});
     CameraOverrides size;
     size.width = 64;
