@@ -232,6 +232,9 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   json failures = json::array();
   const auto fail = [&](const std::string& scene, const std::string& what, const std::string& why) {
     failures.push_back({{"scene", scene}, {"point", what}, {"error", why}});
+    // A failed point counts as done for the progress line, and its time stays out of the ETA.
+    if (!what.empty()) ++done;
+    since = std::chrono::steady_clock::now();
     if (o.on_progress)
       o.on_progress(
           fmt::format("warning: {} {} failed: {}", scene, what.empty() ? "(scene)" : what, why));
