@@ -35,6 +35,7 @@ void add_experiment_commands(CLI::App& app);
 void add_btf_commands(CLI::App& app);
 void add_render_commands(CLI::App& app);
 void add_image_commands(CLI::App& app);
+void add_sh_commands(CLI::App& app);
 
 /// The OpenCL context the global options ask for; nullopt with --no-opencl or without OpenCL.
 std::optional<ClContext> open_device_from_options();

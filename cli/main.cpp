@@ -5,10 +5,10 @@
 
 #include "commands.h"
 #include "prtlab/base/build_info.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/base/progress.h"
+#include "prtlab/compress/compressor_registry.h"
 
 int main(int argc, char** argv) {
   using namespace prt;
@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   cli::add_btf_commands(app);
   cli::add_render_commands(app);
   cli::add_image_commands(app);
+  cli::add_sh_commands(app);
 
   try {
     app.parse(argc, argv);
