@@ -339,6 +339,44 @@ void scaling_section(std::string& md, const json& result, const fs::path& folder
     md += "![storage and frame rate against the swept setting](scaling.png)\n\n";
 }
 
+// The experiment's [[curves]] (docs/experiments.md "Curves"): per curve and scene a table of
+// the curve's points and the plot scripts/plot_experiment.py drew.
+void curves_section(std::string& md, const json& result, const fs::path& folder) {
+  const json curves = result.at("experiment").value("curves", json::array());
+  if (curves.empty()) return;
+  md += "## Curves\n\n";
+  for (std::size_t n = 0; n < curves.size(); ++n) {
+    const json& c = curves[n];
+    const std::string backend = c.at("backend"), x = c.at("x"), y = c.at("y");
+    const std::string series = c.at("series"), panel = c.at("panel");
+    const std::string title = c.value("title", std::string());
+    md += fmt::format("### {}\n\n", title.empty() ? fmt::format("`{}`: {} against {}", backend, y, x)
+                                                    : title);
+    for (const auto& scene : result.at("scenes")) {
+      const std::string name = scene.at("scene");
+      std::string rows;
+      for (const auto& p : result.at("points")) {
+        if (p.at("scene") != name || p.at("backend") != backend) continue;
+        const json& cp = p.at("canonical_params");
+        const auto par = [&](const std::string& k) {
+          return k.empty() ? std::string("-") : cp.value(k, std::string("?"));
+        };
+        rows += fmt::format("| {} | {} | {} | {} | {:.3f} | {} |\n", par(panel), par(series),
+                            par(x), fmt_num(p.value(y, json(nullptr)), "{:.4g}"),
+                            num(p.at("storage_bytes")) / 1e6,
+                            fmt_num(p.value("compress_seconds", json(nullptr)), "{:.2f}"));
+      }
+      if (rows.empty()) continue;
+      md += fmt::format("{}:\n\n| {} | {} | {} | {} | storage MB | compress s |\n"
+                        "|---|---|---:|---:|---:|---:|\n{}\n",
+                        name, panel.empty() ? "-" : panel, series.empty() ? "-" : series, x, y,
+                        rows);
+      const std::string plot = fmt::format("curves{}-{}.png", n, name);
+      if (fs::exists(folder / plot)) md += fmt::format("![{} against {}]({})\n\n", y, x, plot);
+    }
+  }
+}
+
 }  // namespace
 
 std::string render_experiment_markdown(const json& result, const fs::path& folder) {
@@ -400,6 +438,7 @@ std::string render_experiment_markdown(const json& result, const fs::path& folde
       sweep_section(md, result, scene, folder);
   }
   scaling_section(md, result, folder);
+  curves_section(md, result, folder);
 
   if (!result.at("paper").empty()) {
     md += "## The papers' numbers\n\n";

@@ -70,6 +70,15 @@ std::vector<std::map<std::string, std::string>> sweep_points(const ExperimentSpe
   const auto& entry = CompressorRegistry::instance().get(backend);
   const auto fixed = spec.params.contains(backend) ? spec.params.at(backend)
                                                    : std::map<std::string, std::string>{};
+  if (spec.points.contains(backend)) {
+    std::vector<std::map<std::string, std::string>> out;
+    for (const auto& point : spec.points.at(backend)) {
+      auto p = fixed;
+      for (const auto& [k, v] : point) p[k] = v;
+      out.push_back(std::move(p));
+    }
+    return out;
+  }
   if (spec.grid.contains(backend)) return grid_points(spec.grid.at(backend), fixed);
   if (!entry.size_knob || fixed.contains(entry.size_knob->key)) return {fixed};
   std::vector<std::map<std::string, std::string>> out;

@@ -25,7 +25,10 @@ const std::set<std::string> kTopKeys = {
     "name",       "title",     "kind",    "scenes",      "scene_grid",   "backends",
     "exclude",    "params",    "grid",    "knob_points", "environments", "views",
     "image",      "btf",       "repeats", "timing",      "images",       "fps",
-    "fps_frames", "reference", "target",  "paper",       "paper_source", "variant"};
+    "fps_frames", "reference", "target",  "paper",       "paper_source", "variant",
+    "points",     "curves"};
+const std::set<std::string> kCurveKeys = {"backend", "x",     "y",     "series",
+                                          "panel",   "log_x", "log_y", "title"};
 
 std::string join(const auto& items) {
   std::string out;
@@ -197,7 +200,19 @@ nlohmann::json to_json(const ExperimentSpec& s) {
             {"backends", s.backends},
             {"params", s.params},
             {"grid", s.grid},
+            {"points", s.points},
             {"knob_points", s.knob_points}});
+  nlohmann::json curves = nlohmann::json::array();
+  for (const CurveSpec& c : s.curves)
+    curves.push_back({{"backend", c.backend},
+                      {"x", c.x},
+                      {"y", c.y},
+                      {"series", c.series},
+                      {"panel", c.panel},
+                      {"log_x", c.log_x},
+                      {"log_y", c.log_y},
+                      {"title", c.title}});
+  j["curves"] = curves;
   if (s.kind == ExperimentKind::kEqualStorage)
     j["target"] = {{"backend", s.target.backend},
                    {"params", s.target.params},
@@ -324,6 +339,69 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
       }
     }
   }
+  if (const auto* pt = table_at(file, t, "points")) {
+    for (const auto& [b, list] : *pt) {
+      const auto* arr = list.as_array();
+      if (!arr || arr->empty())
+        throw InputError(file, line_of(list) + fmt::format("points.{} must be a non-empty list of "
+                                                           "parameter tables ([[points.{}]])",
+                                                           b.str(), b.str()));
+      if (s.grid.contains(std::string(b.str())))
+        throw InputError(file, line_of(list) + fmt::format("backend {} has both a grid and "
+                                                           "points: give one",
+                                                           b.str()));
+      for (const auto& e : *arr)
+        s.points[std::string(b.str())].push_back(param_table(file, e, b.str()));
+    }
+  }
+  if (const auto* cv = t.get("curves")) {
+    const auto* arr = cv->as_array();
+    if (!arr) throw InputError(file, line_of(*cv) + "curves must be a list of tables ([[curves]])");
+    for (const auto& e : *arr) {
+      const auto* ct = e.as_table();
+      if (!ct) throw InputError(file, line_of(e) + "each [[curves]] entry must be a table");
+      check_keys(file, *ct, kCurveKeys, "a curve");
+      CurveSpec c;
+      const auto str = [&](const char* key, std::string& out, bool required) {
+        const toml::node* n = ct->get(key);
+        if (!n) {
+          if (required)
+            throw InputError(file, line_of(e) + fmt::format("a curve needs '{}'", key));
+          return;
+        }
+        auto v = n->value_exact<std::string>();
+        if (!v) throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a string", key));
+        out = *v;
+      };
+      const auto flag = [&](const char* key, bool& out) {
+        if (const toml::node* n = ct->get(key)) {
+          auto v = n->value_exact<bool>();
+          if (!v) throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a boolean", key));
+          out = *v;
+        }
+      };
+      str("backend", c.backend, true);
+      str("x", c.x, true);
+      str("y", c.y, false);
+      str("series", c.series, false);
+      str("panel", c.panel, false);
+      str("title", c.title, false);
+      flag("log_x", c.log_x);
+      flag("log_y", c.log_y);
+      if (registry.contains(c.backend)) {
+        const auto& entry = registry.get(c.backend);
+        for (const std::string* key : {&c.x, &c.series, &c.panel}) {
+          if (key->empty()) continue;
+          const bool known = std::any_of(entry.params.begin(), entry.params.end(),
+                                         [&](const ParamSpec& p) { return p.key == *key; });
+          if (!known)
+            throw InputError(file, line_of(e) + fmt::format("curve: '{}' is not a parameter of {}",
+                                                            *key, c.backend));
+        }
+      }
+      s.curves.push_back(std::move(c));
+    }
+  }
   // Parameters of backends that exist are validated now (a typo costs nothing); those of a
   // backend that is not registered (a plugin not loaded this time) are left alone.
   for (const auto& b : s.backends) {
@@ -332,6 +410,12 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
         s.params.contains(b) ? s.params.at(b) : std::map<std::string, std::string>{};
     try {
       (void)ParamSet(b, entry.params, probe);
+      if (s.points.contains(b))
+        for (const auto& point : s.points.at(b)) {
+          auto with = probe;
+          for (const auto& [k, v] : point) with[k] = v;
+          (void)ParamSet(b, entry.params, with);
+        }
       if (s.grid.contains(b))
         for (const auto& [k, values] : s.grid.at(b))
           for (const auto& v : values) {

@@ -41,6 +41,20 @@ struct TargetSpec {
   int max_probes = 14;                        ///< compressions a search may spend per backend
 };
 
+/// A plot of a sweep (docs/experiments.md "Curves"): one backend's points, `y` (a points.csv
+/// column) against the parameter `x`, one line per value of the parameter `series`, one panel
+/// per value of `panel` (optional). The CPCA paper's Fig. 2/3 are such curves.
+struct CurveSpec {
+  std::string backend;
+  std::string x;
+  std::string y = "frobenius_se";
+  std::string series;  ///< empty: one line
+  std::string panel;   ///< empty: one panel
+  bool log_x = false;
+  bool log_y = false;
+  std::string title;
+};
+
 struct ExperimentSpec {
   std::filesystem::path file;
   std::string name;     ///< the result folder: results/<name>[-<variant>]/
@@ -57,6 +71,10 @@ struct ExperimentSpec {
   /// Values swept per backend and key; a backend without a grid sweeps its size knob at
   /// `knob_points` values (or is measured once when it has none).
   std::map<std::string, std::map<std::string, std::vector<std::string>>> grid;
+  /// Explicit points per backend (`[[points.<backend>]]` tables), each over the fixed params;
+  /// a backend has either a grid or points.
+  std::map<std::string, std::vector<std::map<std::string, std::string>>> points;
+  std::vector<CurveSpec> curves;
   int knob_points = 5;
   std::vector<EnvironmentSpec> environments;
   std::vector<std::string> views;  ///< scene view presets; empty: the scene's first

@@ -200,6 +200,58 @@ def perceptual(result, folder):
         os.replace(tmp, os.path.join(folder, "perceptual.json"))
 
 
+def param_value(v):
+    try:
+        f = float(v)
+        return int(f) if f.is_integer() else f
+    except (TypeError, ValueError):
+        return v
+
+
+def curve_plots(result, folder):
+    """The experiment's [[curves]]: y against a parameter, a line per series value, a panel per
+    panel value (the CPCA paper's Fig. 2 and 3 are such plots)."""
+    points = result["points"]
+    for n, curve in enumerate(result["experiment"].get("curves", [])):
+        for scene in [s["scene"] for s in result["scenes"]]:
+            pts = [p for p in points if p["scene"] == scene and p["backend"] == curve["backend"]
+                   and number(p.get(curve["y"])) is not None]
+            if not pts:
+                continue
+            par = lambda p, k: param_value(p["canonical_params"].get(k)) if k else ""
+            panels = sorted({par(p, curve["panel"]) for p in pts}, key=str)
+            fig, axes = plt.subplots(1, len(panels), figsize=(4.8 * len(panels), 3.9), squeeze=False,
+                                     sharey=True)
+            for c, panel in enumerate(panels):
+                ax = axes[0][c]
+                pp = [p for p in pts if par(p, curve["panel"]) == panel]
+                series = sorted({par(p, curve["series"]) for p in pp},
+                                key=lambda v: (isinstance(v, str), v))
+                cmap = plt.get_cmap("viridis")
+                for i, sv in enumerate(series):
+                    sp = sorted([p for p in pp if par(p, curve["series"]) == sv],
+                                key=lambda p: par(p, curve["x"]))
+                    xs = [par(p, curve["x"]) for p in sp]
+                    ys = [max(p[curve["y"]], 1e-12) for p in sp]
+                    label = f'{curve["series"]} = {sv}' if curve["series"] else curve["backend"]
+                    ax.plot(xs, ys, "o-", ms=3.5, lw=1.2, label=label,
+                            color=cmap(i / max(1, len(series) - 1)))
+                if curve.get("log_x"):
+                    ax.set_xscale("log", base=2)
+                if curve.get("log_y"):
+                    ax.set_yscale("log")
+                ax.set_xlabel(curve["x"])
+                if c == 0:
+                    ax.set_ylabel(curve["y"])
+                if curve["panel"]:
+                    ax.set_title(f'{curve["panel"]} = {panel}', fontsize=9)
+                ax.grid(True, which="both", alpha=0.25)
+                ax.legend(fontsize=7)
+            title = curve.get("title") or f'{curve["backend"]}: {curve["y"]} against {curve["x"]}'
+            fig.suptitle(f"{scene}: {title}", fontsize=10)
+            write_atomically(fig, os.path.join(folder, f"curves{n}-{scene}.png"))
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: plot_experiment.py RESULT_FOLDER")
@@ -216,6 +268,7 @@ def main():
     else:
         pareto_plots(result, folder)
         scaling_plot(result, folder)
+    curve_plots(result, folder)
     print(f"plot_experiment.py: plots of {folder} written")
 
 

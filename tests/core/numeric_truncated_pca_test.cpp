@@ -287,5 +287,57 @@ TEST(TruncatedPca, RejectsBadParameters) {
   EXPECT_THROW(pca_coefficients(RowSet::dense(other), p), ParameterError);
 }
 
+TEST(TruncatedPca, LanczosPathMatchesDenseEigenDecomposition) {
+  const Csr s = sparse_rows(300, 400, 30, 0.97, kSeed + 7);
+  const Reference r = reference(s.dense);
+  TruncatedPcaOptions o;
+  o.method = PcaMethod::kLanczos;
+  o.seed = kSeed;
+  for (const int k : {1, 8}) {
+    o.components = k;
+    const TruncatedPca p = truncated_pca(s.set(), o);
+    EXPECT_EQ(p.method, PcaMethod::kLanczos);
+    // Spectra stops when every Ritz value is within tol of converged, i.e. a residual of about
+    // sqrt(tol) lambda_max in the worst case.
+    expect_matches(p, r, k, std::sqrt(o.tolerance), s.dense.rows(),
+                   "sparse Lanczos, k = " + std::to_string(k) + ", seed " + std::to_string(kSeed));
+  }
+  o.components = 400;
+  EXPECT_THROW(truncated_pca(s.set(), o), ParameterError) << "Lanczos needs k < n";
+}
+
+// A warm start spans part of the answer: the result is the same decomposition, and since
+// Rayleigh-Ritz sees the start columns, even one iteration captures at least their variance.
+TEST(TruncatedPca, WarmStartKeepsAtLeastTheStartBlocksVariance) {
+  const Eigen::MatrixXd x = decaying_rows(600, 80, 0.9, kSeed + 3);
+  const Reference r = reference(x);
+  TruncatedPcaOptions o;
+  o.method = PcaMethod::kSubspace;
+  o.components = 6;
+  o.seed = kSeed;
+  const TruncatedPca cold = truncated_pca(RowSet::dense(x), o);
+  // A start that is the true top-4 subspace, slightly rotated.
+  Eigen::MatrixXd start = r.vectors.leftCols(4);
+  start.col(0) += 0.05 * r.vectors.col(20);
+  o.start = start;
+  const TruncatedPca warm = truncated_pca(RowSet::dense(x), o);
+  expect_matches(warm, r, 6, o.tolerance, x.rows(), "warm start");
+  // Started from the exact top-6 subspace, Rayleigh-Ritz meets the tolerance before iterating.
+  o.start = r.vectors.leftCols(6);
+  const TruncatedPca exact = truncated_pca(RowSet::dense(x), o);
+  EXPECT_EQ(exact.iterations, 0);
+  EXPECT_GT(cold.iterations, 0);
+  o.start = start;
+  o.max_iterations = 0;
+  const TruncatedPca one = truncated_pca(RowSet::dense(x), o);
+  const Eigen::MatrixXd c = x.rowwise() - r.mean.transpose();
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(start);
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(x.cols(), 4);
+  const double start_variance = (c * q).squaredNorm();
+  EXPECT_GE((c * one.components).squaredNorm(), start_variance * (1 - 1e-12));
+  o.start = Eigen::MatrixXd::Zero(79, 2);
+  EXPECT_THROW(truncated_pca(RowSet::dense(x), o), ParameterError);
+}
+
 }  // namespace
 }  // namespace prt

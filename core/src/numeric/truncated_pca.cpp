@@ -4,6 +4,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Spectra/SymEigsSolver.h>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -14,6 +16,7 @@
 #include <type_traits>
 
 #include "numeric/row_access.h"
+#include "prtlab/numeric/row_products.h"
 #include "prtlab/base/error.h"
 
 namespace prt {
@@ -54,12 +57,13 @@ template <class A>
 RowMajorMatrixXd apply_c(const A& a, const RowMajorMatrixXd& q, const Eigen::VectorXd& mu) {
   const Eigen::RowVectorXd mu_q = mu.transpose() * q;
   RowMajorMatrixXd y(static_cast<Eigen::Index>(a.rows()), q.cols());
+  const auto l = static_cast<std::size_t>(q.cols());
+  const double* qd = q.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.rows(), 128), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      auto yi = y.row(static_cast<Eigen::Index>(i));
-      yi = -mu_q;
-      a.for_each(i,
-                 [&](std::size_t j, double x) { yi += x * q.row(static_cast<Eigen::Index>(j)); });
+      y.row(static_cast<Eigen::Index>(i)) = -mu_q;
+      double* yi = y.data() + i * l;
+      a.for_each(i, [&](std::size_t j, double x) { axpy_f64(x, qd + j * l, yi, l); });
     }
   });
   return y;
@@ -69,9 +73,11 @@ RowMajorMatrixXd apply_c(const A& a, const RowMajorMatrixXd& q, const Eigen::Vec
 template <class A>
 RowMajorMatrixXd apply_ct(const A& a, const RowMajorMatrixXd& y, const Eigen::VectorXd& mu) {
   RowMajorMatrixXd z = -mu * y.colwise().sum();
+  const auto l = static_cast<std::size_t>(y.cols());
+  double* zd = z.data();
   for (std::size_t i = 0; i < a.rows(); ++i) {
-    const auto yi = y.row(static_cast<Eigen::Index>(i));
-    a.for_each(i, [&](std::size_t j, double x) { z.row(static_cast<Eigen::Index>(j)) += x * yi; });
+    const double* yi = y.data() + i * l;
+    a.for_each(i, [&](std::size_t j, double x) { axpy_f64(x, yi, zd + j * l, l); });
   }
   return z;
 }
@@ -185,7 +191,9 @@ void subspace_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k,
   const Eigen::Index l = std::min({k + o.oversampling, n, m});
   std::mt19937_64 rng(o.seed);
   Eigen::MatrixXd start(n, l);
-  for (Eigen::Index c = 0; c < l; ++c) {
+  const Eigen::Index warm = o.start.rows() == n ? std::min(l, o.start.cols()) : 0;
+  if (warm > 0) start.leftCols(warm) = o.start.leftCols(warm);
+  for (Eigen::Index c = warm; c < l; ++c) {
     for (Eigen::Index r = 0; r < n; ++r) {
       start(r, c) = static_cast<double>(rng() >> 11) * 0x1.0p-52 - 1.0;
     }
@@ -209,13 +217,14 @@ void subspace_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k,
   };
   rayleigh_ritz();
   int it = 0;
-  for (;;) {
+  // The iteration cap is tested first: a capped run (CPCA's passes) needs no residual.
+  while (it < o.max_iterations) {
     const RowMajorMatrixXd z = apply_ct(a, y, mu);  // S Q
     double worst = 0.0;
     for (Eigen::Index j = 0; j < k; ++j) {
       worst = std::max(worst, (z.col(j) - theta[j] * q.col(j)).norm());
     }
-    if (worst <= o.tolerance * theta[0] || it >= o.max_iterations) break;
+    if (worst <= o.tolerance * theta[0]) break;
     q = orth(z);
     rayleigh_ritz();
     ++it;
@@ -225,6 +234,58 @@ void subspace_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k,
   out.eigenvalues = theta.head(k);
   // Ritz vectors are orthonormal to rounding; one more pass makes that exact-ish for callers
   // that rely on U^T U = I.
+  orthonormalise(out.components, k);
+}
+
+// S x = C^T (C x) applied through the rows, for Spectra: C x is one sparse dot per row, C^T y a
+// sequential sum so that the result does not depend on the thread count.
+template <class A>
+class ScatterOperator {
+ public:
+  using Scalar = double;
+  ScatterOperator(const A& a, const Eigen::VectorXd& mu) : a_(a), mu_(mu), y_(a.rows()) {}
+  Eigen::Index rows() const { return static_cast<Eigen::Index>(a_.cols()); }
+  Eigen::Index cols() const { return rows(); }
+  void perform_op(const double* x_in, double* y_out) const {
+    const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
+    const double mu_x = mu_.dot(x);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a_.rows(), 256), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) y_[i] = dot(a_, i, x_in) - mu_x;
+    });
+    Eigen::Map<Eigen::VectorXd> out(y_out, rows());
+    out = -mu_ * y_.sum();
+    for (std::size_t i = 0; i < a_.rows(); ++i) axpy(a_, i, y_[i], y_out);
+  }
+
+ private:
+  const A& a_;
+  const Eigen::VectorXd& mu_;
+  mutable Eigen::VectorXd y_;
+};
+
+template <class A>
+void lanczos_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k,
+                  const TruncatedPcaOptions& o, TruncatedPca& out) {
+  const auto n = static_cast<Eigen::Index>(a.cols());
+  ScatterOperator<A> op(a, mu);
+  const Eigen::Index ncv = std::min(n, std::max<Eigen::Index>(2 * k + 1, k + 20));
+  Spectra::SymEigsSolver<ScatterOperator<A>> eigs(op, k, ncv);
+  // A seeded start vector: Spectra's own init() is seeded too, but the seed is not ours.
+  std::mt19937_64 rng(o.seed);
+  Eigen::VectorXd v0(n);
+  for (Eigen::Index r = 0; r < n; ++r) v0[r] = static_cast<double>(rng() >> 11) * 0x1.0p-52 - 1.0;
+  if (o.start.rows() == n && o.start.cols() > 0) v0 += o.start.rowwise().sum();
+  eigs.init(v0.data());
+  eigs.compute(Spectra::SortRule::LargestAlge, std::max(1, o.max_iterations),
+               std::max(o.tolerance, 1e-14));
+  if (eigs.info() != Spectra::CompInfo::Successful) {
+    throw Error(fmt::format(
+        "truncated_pca: Spectra's Lanczos did not converge to {} eigenpairs within {} restarts",
+        k, o.max_iterations));
+  }
+  out.iterations = static_cast<int>(eigs.num_iterations());
+  out.components = eigs.eigenvectors();
+  out.eigenvalues = eigs.eigenvalues();
   orthonormalise(out.components, k);
 }
 
@@ -248,7 +309,16 @@ TruncatedPca truncated_pca(const RowSet& rows, const TruncatedPcaOptions& option
                  ? PcaMethod::kGram
                  : PcaMethod::kSubspace;
   }
-  if (method == PcaMethod::kSubspace && m < static_cast<std::size_t>(k)) {
+  if (options.start.size() > 0 && static_cast<std::size_t>(options.start.rows()) != n) {
+    throw ParameterError(fmt::format("truncated_pca: the start block has {} rows, the rows {}",
+                                     options.start.rows(), n));
+  }
+  if (method == PcaMethod::kLanczos && static_cast<std::size_t>(k) >= n) {
+    throw ParameterError(fmt::format(
+        "truncated_pca: Lanczos needs fewer components than the dimension ({} of {})", k, n));
+  }
+  if ((method == PcaMethod::kSubspace || method == PcaMethod::kLanczos) &&
+      m < static_cast<std::size_t>(k)) {
     throw ParameterError(fmt::format(
         "truncated_pca: the subspace iteration needs at least {} rows (it has {}); use kGram", k,
         m));
@@ -263,6 +333,8 @@ TruncatedPca truncated_pca(const RowSet& rows, const TruncatedPcaOptions& option
     }
     if (method == PcaMethod::kGram) {
       gram_path(a, out.mean, k, out);
+    } else if (method == PcaMethod::kLanczos) {
+      lanczos_path(a, out.mean, k, options, out);
     } else {
       subspace_path(a, out.mean, k, options, out);
     }

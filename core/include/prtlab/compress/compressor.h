@@ -8,6 +8,7 @@
 //
 // Every backend is measured against the exact CSR product L* = T L in the pixel basis.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -90,6 +91,9 @@ class DeviceRelighter {
   }
 };
 
+/// declared_error_bound() of a backend that guarantees no bound.
+inline constexpr double kNoErrorBound = std::numeric_limits<double>::infinity();
+
 class CompressedTransfer {
  public:
   virtual ~CompressedTransfer() = default;
@@ -105,7 +109,8 @@ class CompressedTransfer {
   enum class ErrorNorm { kRelativeL2, kRelativeL1 };
   /// The relative error of relight() vs the exact product that the backend guarantees for any
   /// non-negative light, in declared_error_norm(); 0 for lossless results (then only float
-  /// rounding remains).
+  /// rounding remains); +infinity (kNoErrorBound) for a fit that guarantees nothing of T L (it
+  /// minimises another error, e.g. CPCA's squared error of T), which JSON writes as null.
   virtual double declared_error_bound() const = 0;
   virtual ErrorNorm declared_error_norm() const { return ErrorNorm::kRelativeL2; }
   /// The relative Frobenius error ||T~ - T||_F / ||T||_F the backend expects of itself, computed

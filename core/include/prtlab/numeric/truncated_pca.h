@@ -18,6 +18,9 @@ enum class PcaMethod {
   kAuto,
   kGram,      ///< eigen-decomposition of the m x m matrix C C^T
   kSubspace,  ///< block subspace iteration with Rayleigh-Ritz on the implicit C^T C
+  /// Spectra's implicitly restarted Lanczos (SymEigsSolver) on the implicit C^T C: one
+  /// matrix-vector product per step, for a one-off PCA of a large cluster.
+  kLanczos,
 };
 
 struct TruncatedPcaOptions {
@@ -32,6 +35,11 @@ struct TruncatedPcaOptions {
   /// ||S u - lambda u|| <= tolerance * lambda_max, S = C^T C.
   double tolerance = 1e-10;
   std::uint64_t seed = 0;  ///< the random start block of the subspace iteration
+  /// Warm start of the subspace iteration (n x j, any j): its columns open the start block and
+  /// random ones fill the rest. Rayleigh-Ritz then works on a span that contains these columns,
+  /// so the components found capture at least as much of the scatter as they do. CPCA passes a
+  /// cluster's previous components, which after a reclassification are nearly converged.
+  Eigen::MatrixXd start;
   /// false: components of the raw rows (mean reported as zero), for fits that keep no mean.
   bool center = true;
 };
