@@ -13,6 +13,7 @@
 
 #include "experiment_report.h"
 #include "experiment_spec.h"
+#include "plot_script.h"
 #include "point_measurement.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/backend_input.h"
@@ -334,6 +335,74 @@ repeats = 2
   EXPECT_EQ(result_folder(quick, "r"), fs::path("r") / "v-quick");
   // "*" is every registered backend.
   EXPECT_EQ(top.backends, CompressorRegistry::instance().names());
+}
+
+// Explicit [[points]] are measured as listed (and nothing else), [[curves]] reach result.json,
+// the plot and the report, and frobenius_se_declared is the backend's exact squared error.
+TEST_F(ExperimentRun, ExplicitPointsAndCurves) {
+  const auto f = write_spec("curves", R"(
+name = "tiny-curves"
+kind = "sweep"
+scenes = ["tiny-sphere-plane"]
+backends = ["cpca"]
+environments = ["courtyard"]
+images = false
+timing = false
+[[points.cpca]]
+clusters = 2
+vectors = 0
+[[points.cpca]]
+clusters = 4
+vectors = 1
+method = "static"
+[[curves]]
+backend = "cpca"
+x = "clusters"
+y = "frobenius_se_declared"
+series = "vectors"
+log_y = true
+)");
+  const ExperimentSpec spec = parse(f);
+  ASSERT_EQ(spec.points.at("cpca").size(), 2u);
+  ASSERT_EQ(spec.curves.size(), 1u);
+  EXPECT_EQ(spec.curves[0].series, "vectors");
+  const RunSummary s = run_experiment(spec, options("curves"));
+  const json& points = s.result.at("points");
+  ASSERT_EQ(points.size(), 2u);
+  for (const auto& p : points) {
+    const double declared = p.at("frobenius_se_declared").get<double>();
+    const double measured = p.at("frobenius_se").get<double>();
+    // se = rel^2 ||T||^2, so its standard error is 2 stderr(rel) se / rel.
+    const double stderr_se = 2 * p.at("frobenius_stderr").get<double>() * measured /
+                             p.at("frobenius_rel").get<double>();
+    EXPECT_GT(declared, 0.0);
+    // The harness's estimate agrees with the declared value within its own standard error.
+    EXPECT_NEAR(measured, declared, 5 * stderr_se + 1e-3 * declared);
+  }
+  EXPECT_EQ(s.result.at("experiment").at("curves").size(), 1u);
+  write_experiment_report(s.folder, true, true);
+  EXPECT_NE(read(s.folder / "README.md").find("## Curves"), std::string::npos);
+  if (python_with_matplotlib()) {
+    EXPECT_TRUE(fs::exists(s.folder / "curves0-tiny-sphere-plane.png"));
+  }
+  // A backend with both a grid and points, and a curve naming no parameter, are refused.
+  const auto bad = write_spec("bad", R"(
+name = "x"
+scenes = ["bunny"]
+[grid.cpca]
+vectors = [1, 2]
+[[points.cpca]]
+vectors = 3
+)");
+  EXPECT_THROW(parse(bad), InputError);
+  const auto bad2 = write_spec("bad2", R"(
+name = "x"
+scenes = ["bunny"]
+[[curves]]
+backend = "cpca"
+x = "colour"
+)");
+  EXPECT_THROW(parse(bad2), InputError);
 }
 
 TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {
