@@ -3,6 +3,7 @@
 
 #include "cpca/cpca.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_id_list.h"
 #include "prtlab/opencl/cl_runtime.h"
 
 namespace prt::cpca {
@@ -32,9 +33,10 @@ class CpcaDevice final : public DeviceRelighter {
         light_host_(cols_) {
     if (rows_ > std::numeric_limits<std::uint32_t>::max() ||
         reps_ * cols_ > std::numeric_limits<std::uint32_t>::max())
-      throw ParameterError(fmt::format("{}: {} rows or {} representatives exceed the kernels' u32 "
-                                       "indices",
-                                       kName, rows_, reps_));
+      throw ParameterError(
+          fmt::format("{}: {} rows or {} representatives exceed the kernels' u32 "
+                      "indices",
+                      kName, rows_, reps_));
     KernelDefines defines;
     defines.set("PRT_WG_SIZE", kWorkGroup)
         .set("PRT_ID_T", id_type(a.id_bytes()))
@@ -89,7 +91,6 @@ class CpcaDevice final : public DeviceRelighter {
     products_ = make_buffer(ctx, reps_ * sizeof(cl_float4), CL_MEM_READ_WRITE, "cpca products");
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "cpca light");
     out_ = make_buffer(ctx, rows_ * sizeof(Rgb), CL_MEM_READ_WRITE, "cpca local radiance");
-    subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "cpca vertex subset");
     set_args(dots_, static_cast<cl_uint>(reps_), static_cast<cl_uint>(cols_), representatives_,
              light_, products_);
     set_args(blend_, static_cast<cl_uint>(rows_), ids_, first_, offsets_, weights_, scales_,
@@ -102,21 +103,15 @@ class CpcaDevice final : public DeviceRelighter {
 
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, vertices_, kName);
-    subset_count_ = vertices.size();
-    if (vertices.size_bytes() > subset_capacity_) {
-      subset_capacity_ = vertices.size_bytes();
-      subset_ = make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "cpca vertex subset");
-    }
-    if (!vertices.empty())
-      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(), "cpca vertex subset");
+    subset_.assign(ctx_, vertices);
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
     const double ms = products(light);
-    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    const std::size_t subset_rows = subset_.size() * static_cast<std::size_t>(dim_);
     if (subset_rows == 0) return ms;
     set_args(blend_vertices_, static_cast<cl_uint>(subset_rows), static_cast<cl_uint>(dim_),
-             subset_, ids_, first_, offsets_, weights_, scales_, products_, out_);
+             subset_.buffer(), ids_, first_, offsets_, weights_, scales_, products_, out_);
     cl::Event event = launch(ctx_, "cpca.blend_vertices", blend_vertices_,
                              LaunchRange::linear(subset_rows, kWorkGroup));
     return ms + event_milliseconds(event, ctx_.info().device_name,
@@ -149,8 +144,8 @@ class CpcaDevice final : public DeviceRelighter {
     check_pixel_light(light, cols_, kName);
     upload_light(ctx_, light_, light.values, light_host_, "cpca light");
     if (reps_ == 0) return 0.0;
-    cl::Event event = launch(ctx_, "cpca.dots", dots_,
-                             LaunchRange::linear(reps_ * kWorkGroup, kWorkGroup));
+    cl::Event event =
+        launch(ctx_, "cpca.dots", dots_, LaunchRange::linear(reps_ * kWorkGroup, kWorkGroup));
     return event_milliseconds(event, ctx_.info().device_name, "timing of kernel cpca.dots");
   }
 
@@ -162,8 +157,7 @@ class CpcaDevice final : public DeviceRelighter {
   cl::Kernel dots_, blend_, blend_vertices_;
   cl::Buffer ids_, first_, offsets_, weights_, scales_, representatives_, products_, light_, out_;
   std::uint64_t bytes_ = 0;
-  cl::Buffer subset_;
-  std::size_t subset_count_ = 0, subset_capacity_ = 0;
+  DeviceIdList subset_{"cpca vertex subset"};
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include "csr_quantized/csr_quantized.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_id_list.h"
 #include "prtlab/opencl/cl_runtime.h"
 
 namespace prt::csr_quantized {
@@ -47,7 +48,6 @@ class CsrQuantizedDevice final : public DeviceRelighter {
     const cl::Program program = build_program(ctx, "csr_quantized", defines);
     kernel_ = make_kernel(program, std::string(kernel_name(q.format)));
     vertices_kernel_ = make_kernel(program, std::string(kernel_name(q.format)) + "_vertices");
-    subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "csr_quantized vertex subset");
 
     offsets_ = upload(ctx, std::span<const std::uint32_t>(q.offsets), "csr_quantized row offsets");
     if (q.narrow_columns()) {
@@ -82,29 +82,22 @@ class CsrQuantizedDevice final : public DeviceRelighter {
 
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, vertices_, kName);
-    subset_count_ = vertices.size();
-    if (vertices.size_bytes() > subset_capacity_) {
-      subset_capacity_ = vertices.size_bytes();
-      subset_ =
-          make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "csr_quantized vertex subset");
-    }
-    if (!vertices.empty())
-      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(),
-                   "csr_quantized vertex subset");
+    subset_.assign(ctx_, vertices);
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
     check_pixel_light(light, cols_, kName);
     upload_light(ctx_, light_, light.values, light_host_, "csr_quantized light");
-    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    const std::size_t subset_rows = subset_.size() * static_cast<std::size_t>(dim_);
     if (subset_rows == 0) return 0.0;  // OpenCL forbids an empty launch
     const auto count = static_cast<cl_uint>(subset_rows);
     const auto dim = static_cast<cl_uint>(dim_);
     if (format_ == ValueFormat::kU8) {
-      set_args(vertices_kernel_, count, dim, subset_, offsets_, columns_, values_, scales_, light_,
-               out_);
+      set_args(vertices_kernel_, count, dim, subset_.buffer(), offsets_, columns_, values_, scales_,
+               light_, out_);
     } else {
-      set_args(vertices_kernel_, count, dim, subset_, offsets_, columns_, values_, light_, out_);
+      set_args(vertices_kernel_, count, dim, subset_.buffer(), offsets_, columns_, values_, light_,
+               out_);
     }
     const std::string name = launch_name_ + ".vertices";
     cl::Event event =
@@ -146,8 +139,7 @@ class CsrQuantizedDevice final : public DeviceRelighter {
   std::uint64_t bytes_ = 0;
   // The vertex subset relit by relight_subset_on_device().
   cl::Kernel vertices_kernel_;
-  cl::Buffer subset_;
-  std::size_t subset_count_ = 0, subset_capacity_ = 0;
+  DeviceIdList subset_{"csr_quantized vertex subset"};
 };
 
 }  // namespace

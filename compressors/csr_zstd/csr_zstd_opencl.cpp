@@ -14,6 +14,7 @@
 
 #include "csr_zstd/csr_zstd.h"
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_id_list.h"
 #include "prtlab/opencl/cl_runtime.h"
 
 namespace prt::csr_zstd {
@@ -46,7 +47,6 @@ class CsrZstdDevice final : public DeviceRelighter {
     const cl::Program program = build_program(ctx, "csr_zstd", defines);
     kernel_ = make_kernel(program, "csr_zstd_rows");
     vertices_kernel_ = make_kernel(program, "csr_zstd_vertices");
-    subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "csr_zstd vertex subset");
     offsets_ = make_buffer(ctx, offsets_host_.size() * 4, CL_MEM_READ_ONLY, "csr_zstd row offsets");
     columns_ = make_buffer(ctx, columns_host_.size(), CL_MEM_READ_ONLY, "csr_zstd column ids");
     counts_ = make_buffer(ctx, counts_host_.size(), CL_MEM_READ_ONLY, "csr_zstd counts");
@@ -62,25 +62,20 @@ class CsrZstdDevice final : public DeviceRelighter {
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, csr_->vertices, kName);
     tasks_ = frame_tasks(*csr_, vertices);
-    subset_count_ = vertices.size();
-    if (vertices.size_bytes() > subset_capacity_) {
-      subset_capacity_ = vertices.size_bytes();
-      subset_ = make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "csr_zstd vertex subset");
-    }
-    if (!vertices.empty())
-      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(), "csr_zstd vertex subset");
+    subset_.assign(ctx_, vertices);
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
     check_pixel_light(light, cols_, kName);
     const auto start = std::chrono::steady_clock::now();
-    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    const std::size_t subset_rows = subset_.size() * static_cast<std::size_t>(dim_);
     if (subset_rows == 0) return 0.0;  // OpenCL forbids an empty launch
     decompress_subset_to_host();
     upload_subset_frames();
     upload_light(ctx_, light_, light.values, light_host_, "csr_zstd light");
     set_args(vertices_kernel_, static_cast<cl_uint>(subset_rows), static_cast<cl_uint>(dim_),
-             subset_, static_cast<float>(csr_->scale()), offsets_, columns_, counts_, light_, out_);
+             subset_.buffer(), static_cast<float>(csr_->scale()), offsets_, columns_, counts_,
+             light_, out_);
     cl::Event event = launch(ctx_, "csr_zstd.vertices", vertices_kernel_,
                              LaunchRange::linear(subset_rows, kWorkGroup));
     event.wait();
@@ -195,8 +190,7 @@ class CsrZstdDevice final : public DeviceRelighter {
   // The vertex subset: its frames, and the kernel over its rows.
   std::vector<FrameTask> tasks_;
   cl::Kernel vertices_kernel_;
-  cl::Buffer subset_;
-  std::size_t subset_count_ = 0, subset_capacity_ = 0;
+  DeviceIdList subset_{"csr_zstd vertex subset"};
 };
 
 }  // namespace

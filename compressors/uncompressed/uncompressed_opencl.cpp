@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_id_list.h"
 #include "prtlab/opencl/cl_runtime.h"
 #include "prtlab/sphere/lit_faces.h"
 #include "uncompressed/uncompressed.h"
@@ -67,7 +68,6 @@ class UncompressedDevice final : public DeviceRelighter {
                                 : make_buffer(ctx, 0, CL_MEM_READ_ONLY, "uncompressed face starts");
       rows_faces_ = make_kernel(program, "uncompressed_rows_faces");
       vertices_kernel_ = make_kernel(program, "uncompressed_vertices");
-      subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "uncompressed vertex subset");
     }
     bytes_ = buffer_bytes({&offsets_, &columns_, &counts_, &light_, &out_, &face_starts_});
     set_args(kernel_, static_cast<cl_uint>(rows_), scale_, offsets_, columns_, counts_, light_,
@@ -79,25 +79,18 @@ class UncompressedDevice final : public DeviceRelighter {
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, vertices_, kName);
     if (!culled_) return;
-    subset_count_ = vertices.size();
-    if (vertices.size_bytes() > subset_capacity_) {
-      subset_capacity_ = vertices.size_bytes();
-      subset_ = make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "uncompressed vertex subset");
-    }
-    if (!vertices.empty())
-      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(),
-                   "uncompressed vertex subset");
+    subset_.assign(ctx_, vertices);
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
     if (!culled_) return relight_on_device(light);
     check_pixel_light(light, cols_, kName);
     upload_light(ctx_, light_, light.values, light_host_, "uncompressed light");
-    const std::size_t subset_rows = subset_count_ * static_cast<std::size_t>(dim_);
+    const std::size_t subset_rows = subset_.size() * static_cast<std::size_t>(dim_);
     if (subset_rows == 0) return 0.0;
     set_args(vertices_kernel_, static_cast<cl_uint>(subset_rows), static_cast<cl_uint>(dim_),
-             subset_, scale_, offsets_, columns_, counts_, face_starts_, lit_of(light), light_,
-             out_);
+             subset_.buffer(), scale_, offsets_, columns_, counts_, face_starts_, lit_of(light),
+             light_, out_);
     cl::Event event = launch(ctx_, "uncompressed.vertices", vertices_kernel_,
                              LaunchRange::linear(subset_rows, kRowsWorkGroup));
     return event_milliseconds(event, ctx_.info().device_name,
@@ -153,9 +146,9 @@ class UncompressedDevice final : public DeviceRelighter {
   std::uint64_t bytes_ = 0;
   // Culling (rows variant only): the face table, the kernels, the vertex subset.
   bool culled_ = false, has_faces_ = false;
-  cl::Buffer face_starts_, subset_;
+  cl::Buffer face_starts_;
   cl::Kernel rows_faces_, vertices_kernel_;
-  std::size_t subset_count_ = 0, subset_capacity_ = 0;
+  DeviceIdList subset_{"uncompressed vertex subset"};
 };
 
 }  // namespace

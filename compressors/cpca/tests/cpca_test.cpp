@@ -18,6 +18,7 @@
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "support/temp_dir.h"
+#include "support/test_light.h"
 
 namespace prt::cpca {
 namespace {
@@ -45,16 +46,7 @@ const CpcaArrays& arrays(const CompressedTransfer& ct) {
 }
 
 std::vector<Rgb> test_light(std::size_t n, std::uint64_t seed) {
-  std::vector<Rgb> light(n);
-  std::uint64_t x = seed;
-  for (auto& l : light) {
-    auto next = [&] {
-      x = x * 6364136223846793005ull + 1442695040888963407ull;
-      return static_cast<float>((x >> 40) & 0xffff) / 65536.0f;
-    };
-    l = Rgb(next(), 2.0f * next(), 0.5f + next());
-  }
-  return light;
+  return prt::testing::pseudo_random_light(n, seed, 2.0f);
 }
 
 // The stored weight i of row r as the format defines it, in double.

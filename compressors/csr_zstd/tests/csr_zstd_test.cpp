@@ -22,6 +22,7 @@
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "support/temp_dir.h"
+#include "support/test_light.h"
 
 namespace prt::csr_zstd {
 namespace {
@@ -52,14 +53,7 @@ const FramedCsr& frames(const CompressedTransfer& ct) {
 }
 
 std::vector<Rgb> test_light(std::size_t n, std::uint64_t seed) {
-  std::vector<Rgb> light(n);
-  std::uint64_t x = seed;
-  auto next = [&] {
-    x = x * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<float>((x >> 40) & 0xffff) / 65536.0f;
-  };
-  for (auto& l : light) l = Rgb(next(), 4.0f * next(), 0.5f + next());
-  return light;
+  return prt::testing::pseudo_random_light(n, seed, 4.0f);
 }
 
 TEST(CsrZstd, FramesDecompressToTsArraysBitForBit) {
