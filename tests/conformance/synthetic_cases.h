@@ -11,6 +11,11 @@
 //                      (R = 8, S = 4, s = 2), with shadows and fractional counts
 //   all_zero           vertices whose blocks hold no non-zero at all (nnz = 0)
 //
+// A backend whose entry asks for an SH transfer (BackendInputs::sh_order) gets one of that
+// order with every case (CaseData::input(entry)): sphere_over_plane the real one of
+// compute_transfer; the others, which have no geometry, the SH transfer of T's own operator
+// (sh_transfer_of_pixels below), so that an all-zero T has all-zero SH matrices too.
+//
 // Each case's description names its seed, so a failure message says how to reproduce it.
 #include <fmt/format.h>
 
@@ -25,10 +30,14 @@
 #include <vector>
 
 #include "prtlab/compress/compressor.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/sphere/hemisphere_grid.h"
-#include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/sphere/spherical_harmonics.h"
+#include "prtlab/transfer/radiance_to_bins.h"
 #include "prtlab/transfer/random_transfer.h"
+#include "prtlab/transfer/sh_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::conformance {
@@ -40,9 +49,61 @@ struct CaseData {
   CubemapLayout cubemap;
   HemisphereGrid grid;
   std::vector<Cubemap> lights;  ///< non-negative radiance at resolution R
+  /// Builds the case's SH transfer of an order (same vertices as T).
+  std::function<ShTransfer(const CaseData&, int order)> make_sh;
 
+  /// T and the bases only.
   TransferInput input() const { return TransferInput{transfer, nullptr, cubemap, grid}; }
+  /// What `entry` declares it reads: T, and the SH transfer when it asks for one.
+  TransferInput input(const CompressorEntry& entry) const {
+    TransferInput in = input();
+    if (entry.inputs.sh_order > 0) in.sh = &sh(entry.inputs.sh_order);
+    return in;
+  }
+  /// The SH transfer of `order`, built on first use.
+  const ShTransfer& sh(int order) const {
+    const std::lock_guard lock(sh_mutex);
+    auto& slot = sh_built[order];
+    if (!slot) slot = std::make_unique<ShTransfer>(make_sh(*this, order));
+    return *slot;
+  }
+
+  // The cache of sh(); public only so that CaseData stays an aggregate.
+  mutable std::mutex sh_mutex;
+  mutable std::map<int, std::unique_ptr<ShTransfer>> sh_built;
 };
+
+/// The SH transfer of a pixel-basis T, for cases without geometry: the light's SH expansion
+/// sampled at the pixel centres (times their solid angles) is what T transfers, and cell j's
+/// L*_j spread evenly over the cell is projected onto the local SH, so
+///   M_p[i][k] = sum_(j, pixel q) (B[j, i] / cell solid angle) T_p[j, q] y_k(d_q) dOmega_q
+/// with B the cell integrals of radiance_to_bins.h. M_p l reproduces T L for lights that are
+/// band-limited to the order, up to the sampling at pixel centres and the SH truncation of
+/// each vertex's cell values.
+inline ShTransfer sh_transfer_of_pixels(const TransferMatrix& t, const CubemapLayout& cubemap,
+                                        const HemisphereGrid& grid, int order) {
+  const int n = sh_count(order), m = t.local_count();
+  const std::vector<double> b = sh_cell_integrals(grid, order);
+  const double cell = grid.cell_solid_angle();
+  ShTransfer sh(order, t.vertex_count());
+  std::vector<double> y(static_cast<std::size_t>(n));
+  for (std::size_t v = 0; v < t.vertex_count(); ++v) {
+    const std::span<double> out = sh.mutable_matrix(v);
+    for (int j = 0; j < m; ++j) {
+      const std::size_t row = v * static_cast<std::size_t>(m) + static_cast<std::size_t>(j);
+      for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e) {
+        const int q = static_cast<int>(t.column(e));
+        sh_eval(order, cubemap.direction(q), y);
+        const double w = t.value(e) * cubemap.solid_angle(q) / cell;
+        for (int i = 0; i < n; ++i) {
+          const double bi = b[static_cast<std::size_t>(j) * n + i] * w;
+          for (int k = 0; k < n; ++k) out[static_cast<std::size_t>(i) * n + k] += bi * y[k];
+        }
+      }
+    }
+  }
+  return sh;
+}
 
 /// A random pixel-basis transfer: every (vertex, column) pair is occupied with probability
 /// `density` by one entry in a random local row with a random count in 1..s^2. Vertices listed
@@ -68,7 +129,7 @@ inline std::vector<Cubemap> test_lights(int resolution, std::uint64_t seed) {
   return {std::move(random), std::move(hdr)};
 }
 
-inline TransferMatrix sphere_over_plane_transfer() {
+inline TransferResult sphere_over_plane_transfer(int sh_order = 0) {
   Mesh mesh = make_plane(3.0, 3.0, 4);
   Mesh sphere = make_sphere(0.5, 12, 6);
   for (auto& p : sphere.positions) p += Vec3(0.2f, 0.8f, -0.1f);
@@ -77,8 +138,9 @@ inline TransferMatrix sphere_over_plane_transfer() {
   params.cubemap_resolution = 8;
   params.local_grid = 4;
   params.supersampling = 2;
+  params.sh_order = sh_order;
   params.show_progress = false;
-  return compute_transfer(mesh, params).transfer;
+  return compute_transfer(mesh, params);
 }
 
 struct CaseSpec {
@@ -94,8 +156,14 @@ inline std::unique_ptr<CaseData> make_case(std::string name, std::string descrip
                                                   std::move(t),
                                                   CubemapLayout(resolution),
                                                   HemisphereGrid(grid_side),
+                                                  {},
+                                                  {},
+                                                  {},
                                                   {}});
   c->lights = test_lights(resolution, light_seed);
+  c->make_sh = [](const CaseData& d, int order) {
+    return sh_transfer_of_pixels(d.transfer, d.cubemap, d.grid, order);
+  };
   return c;
 }
 
@@ -125,11 +193,15 @@ inline const std::vector<CaseSpec>& case_specs() {
       random_case("random_wide", 53, 3, 2, 128, 2, 0.003),
       {"sphere_over_plane",
        [] {
-         return make_case("sphere_over_plane",
-                          "sphere_over_plane: make_sphere(0.5, 12, 6) at (0.2, 0.8, -0.1) over "
-                          "make_plane(3, 3, 4), "
-                          "R = 8, S = 4, s = 2, light seed 61",
-                          sphere_over_plane_transfer(), 8, 4, 61);
+         auto c = make_case("sphere_over_plane",
+                            "sphere_over_plane: make_sphere(0.5, 12, 6) at (0.2, 0.8, -0.1) over "
+                            "make_plane(3, 3, 4), "
+                            "R = 8, S = 4, s = 2, light seed 61",
+                            sphere_over_plane_transfer().transfer, 8, 4, 61);
+         c->make_sh = [](const CaseData&, int order) {
+           return *sphere_over_plane_transfer(order).sh;
+         };
+         return c;
        }},
       {"all_zero",
        [] {
