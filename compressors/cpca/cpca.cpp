@@ -428,8 +428,8 @@ CompressorEntry registry_entry() {
   e.params = {
       {"clusters", ParamType::kInt, "32", 1.0, 65536.0, {}, "clusters m_c"},
       {"vectors", ParamType::kInt, "8", 0.0, 256.0, {},
-       "PCA vectors n' per cluster (adaptive: on average, the budget is rows x n' weights); 0 is "
-       "pure VQ"},
+       "PCA vectors n' per cluster (adaptive: the budget is what n' per cluster stores, weights "
+       "and vectors); 0 is pure VQ"},
       {"method",
        ParamType::kEnum,
        "iterative",
@@ -438,7 +438,8 @@ CompressorEntry registry_entry() {
        {"static", "iterative", "adaptive"},
        "static = LBG VQ then PCA per cluster (section 4.1); iterative = classify by "
        "approximation error, PCA after every classification, vectors added one at a time "
-       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / m_c (4.3)"},
+       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / (m_c + N) under "
+       "equal storage (4.3 with the storage model of 4.1)"},
       {"vq_iterations", ParamType::kInt, "20", 0.0, 1000.0, {},
        "Lloyd iterations of the LBG vector quantisation"},
       {"iterations_per_vector", ParamType::kInt, "10", 0.0, 1000.0, {},
@@ -476,7 +477,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<CpcaCompressor>(std::move(c));
   };
   e.load = &CpcaTransfer::load;
-  e.version = 1;
+  e.version = 2;
   return e;
 }
 

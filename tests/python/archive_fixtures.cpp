@@ -167,7 +167,8 @@ int main(int argc, char** argv) {
     json expected;
     expected["transfers"] = json::array();
 
-    prt::TransferResult with_sh = sphere_over_plane(2);
+    // Order 5: what the SH-input backends (cpca_sh) ask for, so every backend is written below.
+    prt::TransferResult with_sh = sphere_over_plane(5);
     expected["transfers"].push_back(write_transfer(with_sh, dir / "transfer_sh.prt"));
     // Wider than u16 columns: N = 6 * 128^2 = 98,304.
     prt::TransferResult wide;
@@ -182,9 +183,10 @@ int main(int argc, char** argv) {
     const prt::TransferMatrix& t = with_sh.transfer;
     const prt::CubemapLayout cubemap(8);
     const prt::HemisphereGrid grid(4);
-    const prt::TransferInput input{t, nullptr, cubemap, grid};
     auto& registry = prt::CompressorRegistry::instance();
     for (const std::string& name : registry.names()) {
+      const bool wants_sh = registry.get(name).inputs.sh_order > 0;
+      const prt::TransferInput input{t, wants_sh ? &*with_sh.sh : nullptr, cubemap, grid};
       const auto ct = registry.create(name, {})->compress(input, prt::Progress::null());
       const fs::path file = dir / fmt::format("compressed_{}.prt", name);
       prt::save_compressed(*ct, file);

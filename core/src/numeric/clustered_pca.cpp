@@ -256,7 +256,13 @@ class Engine {
     int kmax = o_.adaptive_max_components > 0 ? o_.adaptive_max_components
                                               : std::max(1, 4 * o_.components);
     kmax = std::min<int>(kmax, static_cast<int>(n_));
-    const std::uint64_t budget = static_cast<std::uint64_t>(m_) * o_.components;
+    // The paper's storage model (section 4.1): a vector of cluster c costs its m_c weights and
+    // its own n values. The budget is what the iterative result stores, so adaptive never
+    // stores more. (Section 4.3 ranks by D^2 / m_c, which is the same when n << m_c, as for
+    // its 25-D signals; for T's 6,144-D rows the representatives dominate and must count.)
+    const auto n = static_cast<std::uint64_t>(n_);
+    std::uint64_t budget = 0;
+    for (const CpcaCluster& cl : clusters_) budget += (cl.count + n) * o_.components;
     std::vector<int> k(nc, o_.components);
     for (int it = 0; it < o_.adaptive_iterations; ++it) {
       const std::size_t moved = classify();
@@ -273,7 +279,7 @@ class Engine {
         if (cl.count == 0) continue;
         for (Eigen::Index i = 0; i < cl.eigenvalues.size(); ++i) {
           if (cl.eigenvalues[i] > 0.0) {
-            cand.push_back({cl.eigenvalues[i] / static_cast<double>(cl.count),
+            cand.push_back({cl.eigenvalues[i] / static_cast<double>(cl.count + n),
                             static_cast<std::uint32_t>(c), static_cast<int>(i)});
           }
         }
@@ -283,7 +289,7 @@ class Engine {
       std::fill(k.begin(), k.end(), 0);
       std::uint64_t used = 0;
       for (const Candidate& cd : cand) {
-        const std::uint64_t cost = clusters_[cd.cluster].count;
+        const std::uint64_t cost = clusters_[cd.cluster].count + n;
         if (cd.index == k[cd.cluster] && used + cost <= budget) {
           ++k[cd.cluster];
           used += cost;

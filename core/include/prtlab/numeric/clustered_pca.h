@@ -8,8 +8,10 @@
 //               cluster's PCA after each classification, adding components one at a time from 0
 //               to n' with `iterations_per_component` such passes for each count.
 //   kAdaptive   the iterative result, then passes of: classify (each cluster with its own count),
-//               PCA, and a redistribution of the components by D_i^2 / m_c (the squared error a
-//               component removes per weight it costs) under the budget sum_c m_c k_c <= m n'.
+//               PCA, and a redistribution of the components by D_i^2 / (m_c + n) (the squared
+//               error a component removes per stored value: its m_c weights and its own n
+//               values, the paper's storage model of section 4.1) under the budget
+//               sum_c (m_c + n) k_c <= sum_c (m_c + n) n', what the iterative result stores.
 //
 // What keeps it fast on T's rows (6,144 columns, ~50 non-zeros): no n x n covariance is ever
 // formed (truncated_pca.h works on the implicit centred operator, or C C^T for small clusters);
@@ -101,7 +103,8 @@ struct ClusteredPca {
   double total_squared_norm = 0;   ///< sum_p ||x_p||^2 (the relative error's denominator)
   std::vector<CpcaPass> history;   ///< every pass in order
   CpcaPhaseTimes times;
-  /// Stored weights: sum_c m_c k_c (m n' for static and iterative, at most that for adaptive).
+  /// Stored weights: sum_c m_c k_c (m n' for static and iterative; adaptive keeps
+  /// sum_c (m_c + n) k_c, weights and vectors together, within that of the iterative result).
   std::uint64_t weight_count() const { return weights.size(); }
 };
 
