@@ -456,7 +456,7 @@ CompressorEntry registry_entry() {
        {"float32", "float16", "s8"},
        "precision of the per-row weights: f32, IEEE half, or s8 codes times a per-row f32 scale"},
   };
-  e.size_knob = SizeKnob{"vectors", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 32.0,
+  e.size_knob = SizeKnob{"vectors", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 16.0,
                          SizeKnob::Scale::kLinear};
   e.lossless = false;
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
