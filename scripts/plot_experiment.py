@@ -219,7 +219,8 @@ def curve_plots(result, folder):
             if not pts:
                 continue
             par = lambda p, k: param_value(p["canonical_params"].get(k)) if k else ""
-            panels = sorted({par(p, curve["panel"]) for p in pts}, key=str)
+            panels = sorted({par(p, curve["panel"]) for p in pts},
+                            key=lambda v: (isinstance(v, str), v))
             fig, axes = plt.subplots(1, len(panels), figsize=(4.8 * len(panels), 3.9), squeeze=False,
                                      sharey=True)
             for c, panel in enumerate(panels):

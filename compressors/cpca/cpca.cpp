@@ -190,8 +190,13 @@ CpcaArrays encode(const ClusteredPca& model, const RowSet& rows, std::size_t ver
       break;
     case WeightFormat::kFloat16:
       a.weights16.resize(total);
-      for (std::size_t i = 0; i < total; ++i)
+      for (std::size_t i = 0; i < total; ++i) {
+        if (!(std::abs(model.weights[i]) <= 65504.0))
+          throw ParameterError(fmt::format(
+              "{}: weight {} does not fit an IEEE half (|w| <= 65504); use weights=float32 or s8",
+              kName, model.weights[i]));
         a.weights16[i] = float_to_half(static_cast<float>(model.weights[i]));
+      }
       break;
     case WeightFormat::kS8: {
       a.codes.resize(total);
@@ -200,7 +205,9 @@ CpcaArrays encode(const ClusteredPca& model, const RowSet& rows, std::size_t ver
         const std::uint64_t b = model.weight_offsets[r], e = model.weight_offsets[r + 1];
         double top = 0.0;
         for (std::uint64_t i = b; i < e; ++i) top = std::max(top, std::abs(model.weights[i]));
-        const float scale = top > 0.0 ? static_cast<float>(top / 127.0) : 1.0f;
+        float scale = static_cast<float>(top / 127.0);
+        // A weight range below float's smallest normal (or zero) keeps scale 1: all codes 0.
+        if (!(scale >= std::numeric_limits<float>::min()) || !std::isfinite(scale)) scale = 1.0f;
         a.row_scales[r] = scale;
         for (std::uint64_t i = b; i < e; ++i) {
           const double q = std::nearbyint(model.weights[i] / static_cast<double>(scale));
@@ -371,10 +378,25 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
                            clusters));
   if (!(std::isfinite(a.frobenius_error) && a.frobenius_error >= 0))
     throw fail("the Frobenius error is not a finite non-negative number");
+  // Sizes the kernels index with u32, checked before anything is multiplied or allocated.
+  constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
+  if (a.vertices == 0 || a.vertices > kU32 / static_cast<std::uint64_t>(a.local_count))
+    throw fail(fmt::format("{} vertices x M = {} rows do not fit the relight's u32 row index",
+                           a.vertices, a.local_count));
+  const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
+  if (clusters > rows)
+    throw fail(fmt::format("{} clusters for {} rows", clusters, rows));
   const auto counts = r.section<std::uint16_t>("vector_counts", clusters);
   a.first.assign(clusters + 1, 0);
-  for (std::size_t c = 0; c < clusters; ++c) a.first[c + 1] = a.first[c] + 1u + counts[c];
-  const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
+  std::uint64_t reps = 0;
+  for (std::size_t c = 0; c < clusters; ++c) {
+    if (counts[c] > a.pixel_count)
+      throw fail(fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c],
+                             a.pixel_count));
+    reps += 1u + counts[c];
+    if (reps > kU32) throw fail("the representative count overflows u32");
+    a.first[c + 1] = static_cast<std::uint32_t>(reps);
+  }
   const std::size_t id_bytes = clusters <= 256 ? 1 : (clusters <= 65536 ? 2 : 4);
   if (id_bytes == 1) {
     const auto v = r.view<std::uint8_t>("cluster_ids", rows);
@@ -428,8 +450,8 @@ CompressorEntry registry_entry() {
   e.params = {
       {"clusters", ParamType::kInt, "32", 1.0, 65536.0, {}, "clusters m_c"},
       {"vectors", ParamType::kInt, "8", 0.0, 256.0, {},
-       "PCA vectors n' per cluster (adaptive: the budget is what n' per cluster stores, weights "
-       "and vectors); 0 is pure VQ"},
+       "PCA vectors n' per cluster (adaptive: the budget is the bytes n' per cluster store, "
+       "weights and vectors); 0 is pure VQ"},
       {"method",
        ParamType::kEnum,
        "iterative",
@@ -438,8 +460,8 @@ CompressorEntry registry_entry() {
        {"static", "iterative", "adaptive"},
        "static = LBG VQ then PCA per cluster (section 4.1); iterative = classify by "
        "approximation error, PCA after every classification, vectors added one at a time "
-       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / (m_c + N) under "
-       "equal storage (4.3 with the storage model of 4.1)"},
+       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / (bytes of the "
+       "vector's weights and its N floats) under equal storage (4.3 with the cost model of 4.1)"},
       {"vq_iterations", ParamType::kInt, "20", 0.0, 1000.0, {},
        "Lloyd iterations of the LBG vector quantisation"},
       {"iterations_per_vector", ParamType::kInt, "10", 0.0, 1000.0, {},
@@ -474,10 +496,13 @@ CompressorEntry registry_entry() {
     c.format = p.get_enum<WeightFormat>("weights", {{"float32", WeightFormat::kFloat32},
                                                     {"float16", WeightFormat::kFloat16},
                                                     {"s8", WeightFormat::kS8}});
+    // A stored weight against a stored representative value (f32), for the adaptive budget.
+    c.options.adaptive_weight_cost =
+        c.format == WeightFormat::kFloat32 ? 1.0 : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
     return std::make_unique<CpcaCompressor>(std::move(c));
   };
   e.load = &CpcaTransfer::load;
-  e.version = 2;
+  e.version = 3;
   return e;
 }
 

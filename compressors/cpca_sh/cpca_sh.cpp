@@ -295,8 +295,13 @@ CpcaShArrays encode(const ClusteredPca& model, const RowSet& points, CpcaShArray
       break;
     case WeightFormat::kFloat16:
       a.weights16.resize(total);
-      for (std::size_t i = 0; i < total; ++i)
+      for (std::size_t i = 0; i < total; ++i) {
+        if (!(std::abs(model.weights[i]) <= 65504.0))
+          throw ParameterError(fmt::format(
+              "{}: weight {} does not fit an IEEE half (|w| <= 65504); use weights=float32 or s8",
+              kName, model.weights[i]));
         a.weights16[i] = float_to_half(static_cast<float>(model.weights[i]));
+      }
       break;
     case WeightFormat::kS8: {
       a.codes.resize(total);
@@ -305,7 +310,9 @@ CpcaShArrays encode(const ClusteredPca& model, const RowSet& points, CpcaShArray
         const std::uint64_t b = model.weight_offsets[p], e = model.weight_offsets[p + 1];
         double top = 0.0;
         for (std::uint64_t i = b; i < e; ++i) top = std::max(top, std::abs(model.weights[i]));
-        const float scale = top > 0.0 ? static_cast<float>(top / 127.0) : 1.0f;
+        float scale = static_cast<float>(top / 127.0);
+        // A weight range below float's smallest normal (or zero) keeps scale 1: all codes 0.
+        if (!(scale >= std::numeric_limits<float>::min()) || !std::isfinite(scale)) scale = 1.0f;
         a.vertex_scales[p] = scale;
         for (std::uint64_t i = b; i < e; ++i) {
           const double q = std::nearbyint(model.weights[i] / static_cast<double>(scale));
@@ -499,9 +506,21 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
                            a.order, a.output_order, clusters, a.vertices));
   if (!(std::isfinite(a.signal_error) && a.signal_error >= 0))
     throw fail("the signal error is not a finite non-negative number");
+  constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
+  if (a.vertices > kU32 / static_cast<std::uint64_t>(a.rows()))
+    throw fail(fmt::format("{} vertices x {} output rows do not fit the relight's u32 index",
+                           a.vertices, a.rows()));
   const auto counts = r.section<std::uint16_t>("vector_counts", clusters);
   a.first.assign(clusters + 1, 0);
-  for (std::size_t c = 0; c < clusters; ++c) a.first[c + 1] = a.first[c] + 1u + counts[c];
+  std::uint64_t reps = 0;
+  for (std::size_t c = 0; c < clusters; ++c) {
+    if (counts[c] > a.signal_dim())
+      throw fail(fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c],
+                             a.signal_dim()));
+    reps += 1u + counts[c];
+    if (reps > kU32) throw fail("the representative count overflows u32");
+    a.first[c + 1] = static_cast<std::uint32_t>(reps);
+  }
   const std::size_t id_bytes = clusters <= 256 ? 1 : (clusters <= 65536 ? 2 : 4);
   if (id_bytes == 1) {
     const auto v = r.view<std::uint8_t>("cluster_ids", a.vertices);
@@ -561,8 +580,8 @@ CompressorEntry registry_entry() {
        0.0,
        256.0,
        {},
-       "PCA vectors n' per cluster (adaptive: on average, the budget is vertices x n' weights); "
-       "0 is pure VQ"},
+       "PCA vectors n' per cluster (adaptive: the budget is the bytes n' per cluster store, "
+       "weights and vectors); 0 is pure VQ"},
       {"method",
        ParamType::kEnum,
        "iterative",
@@ -571,7 +590,8 @@ CompressorEntry registry_entry() {
        {"static", "iterative", "adaptive"},
        "static = LBG VQ then PCA per cluster (section 4.1); iterative = classify by "
        "approximation error, PCA after every classification, vectors added one at a time "
-       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / m_c (4.3)"},
+       "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / (bytes of the "
+       "vector's weights and its floats) under equal storage (4.3 with the cost model of 4.1)"},
       {"vq_iterations",
        ParamType::kInt,
        "20",
@@ -662,6 +682,8 @@ CompressorEntry registry_entry() {
     c.format = p.get_enum<WeightFormat>("weights", {{"float32", WeightFormat::kFloat32},
                                                     {"float16", WeightFormat::kFloat16},
                                                     {"s8", WeightFormat::kS8}});
+    c.options.adaptive_weight_cost =
+        c.format == WeightFormat::kFloat32 ? 1.0 : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
     c.projection = p.get_enum<Projection>(
         "projection", {{"zero", Projection::kZero}, {"least_squares", Projection::kLeastSquares}});
     c.metric = p.get_enum<Metric>(

@@ -197,11 +197,15 @@ class Engine {
     for (std::size_t c = 0; c < nc; ++c) {
       const CpcaCluster& cl = clusters_[c];
       const auto f = static_cast<Eigen::Index>(first[c]);
+      // The constants from the float columns the product uses, so that the error expansion is
+      // exact for the (rounded) model it classifies against.
       b.col(f) = cl.mean.cast<float>();
-      mean_sq[c] = cl.mean.squaredNorm();
+      const Eigen::VectorXd mean_f = b.col(f).cast<double>();
+      mean_sq[c] = mean_f.squaredNorm();
       for (int i = 0; i < cl.k(); ++i) {
         b.col(f + 1 + i) = cl.components.col(i).cast<float>();
-        mean_dot[first[c] + 1 + static_cast<std::size_t>(i)] = cl.mean.dot(cl.components.col(i));
+        mean_dot[first[c] + 1 + static_cast<std::size_t>(i)] =
+            mean_f.dot(b.col(f + 1 + i).cast<double>());
       }
     }
     std::vector<std::uint32_t> next(m_);
@@ -260,9 +264,13 @@ class Engine {
     // its own n values. The budget is what the iterative result stores, so adaptive never
     // stores more. (Section 4.3 ranks by D^2 / m_c, which is the same when n << m_c, as for
     // its 25-D signals; for T's 6,144-D rows the representatives dominate and must count.)
-    const auto n = static_cast<std::uint64_t>(n_);
-    std::uint64_t budget = 0;
-    for (const CpcaCluster& cl : clusters_) budget += (cl.count + n) * o_.components;
+    const auto n = static_cast<double>(n_);
+    const double w = o_.adaptive_weight_cost;
+    const auto cost_of = [&](const CpcaCluster& cl) { return w * static_cast<double>(cl.count) + n; };
+    double budget = 0;
+    for (const CpcaCluster& cl : clusters_) budget += cost_of(cl) * o_.components;
+    // Round-off must not let the iterative allocation itself miss the budget.
+    budget *= 1 + 1e-12;
     std::vector<int> k(nc, o_.components);
     for (int it = 0; it < o_.adaptive_iterations; ++it) {
       const std::size_t moved = classify();
@@ -279,7 +287,7 @@ class Engine {
         if (cl.count == 0) continue;
         for (Eigen::Index i = 0; i < cl.eigenvalues.size(); ++i) {
           if (cl.eigenvalues[i] > 0.0) {
-            cand.push_back({cl.eigenvalues[i] / static_cast<double>(cl.count + n),
+            cand.push_back({cl.eigenvalues[i] / cost_of(cl),
                             static_cast<std::uint32_t>(c), static_cast<int>(i)});
           }
         }
@@ -287,9 +295,9 @@ class Engine {
       std::stable_sort(cand.begin(), cand.end(),
                        [](const Candidate& a, const Candidate& b) { return a.rate > b.rate; });
       std::fill(k.begin(), k.end(), 0);
-      std::uint64_t used = 0;
+      double used = 0;
       for (const Candidate& cd : cand) {
-        const std::uint64_t cost = clusters_[cd.cluster].count + n;
+        const double cost = cost_of(clusters_[cd.cluster]);
         if (cd.index == k[cd.cluster] && used + cost <= budget) {
           ++k[cd.cluster];
           used += cost;
@@ -300,7 +308,7 @@ class Engine {
         cl.components = cl.components.leftCols(std::min<Eigen::Index>(k[c], cl.components.cols())).eval();
         cl.eigenvalues = cl.eigenvalues.head(std::min<Eigen::Index>(k[c], cl.eigenvalues.size())).eval();
       }
-      // The error of this pass's classification, under the counts just chosen.
+      // The error of this pass's classification (under the previous pass's counts).
       record("adaptive", o_.components, it, moved);
     }
   }
@@ -384,6 +392,9 @@ ClusteredPca clustered_pca(const RowSet& points, const ClusteredPcaOptions& o) {
       o.adaptive_max_components < 0 || o.pca_iterations_per_pass < 0 ||
       o.pca_oversampling < 0) {
     throw ParameterError("clustered_pca: iteration counts must be >= 0");
+  }
+  if (!(o.adaptive_weight_cost > 0.0) || !std::isfinite(o.adaptive_weight_cost)) {
+    throw ParameterError("clustered_pca: the adaptive weight cost must be a positive number");
   }
   if (!(o.pca_tolerance >= 0.0)) {
     throw ParameterError("clustered_pca: the PCA tolerance must be >= 0");

@@ -8,10 +8,11 @@
 //               cluster's PCA after each classification, adding components one at a time from 0
 //               to n' with `iterations_per_component` such passes for each count.
 //   kAdaptive   the iterative result, then passes of: classify (each cluster with its own count),
-//               PCA, and a redistribution of the components by D_i^2 / (m_c + n) (the squared
-//               error a component removes per stored value: its m_c weights and its own n
-//               values, the paper's storage model of section 4.1) under the budget
-//               sum_c (m_c + n) k_c <= sum_c (m_c + n) n', what the iterative result stores.
+//               PCA, and a redistribution of the components by D_i^2 / (w m_c + n) (the squared
+//               error a component removes per unit of storage: its m_c weights at relative
+//               cost w = adaptive_weight_cost and its own n values, the paper's storage model
+//               of section 4.1) under the budget sum_c (w m_c + n) k_c <= sum_c (w m_c + n) n',
+//               what the iterative result stores.
 //
 // What keeps it fast on T's rows (6,144 columns, ~50 non-zeros): no n x n covariance is ever
 // formed (truncated_pca.h works on the implicit centred operator, or C C^T for small clusters);
@@ -53,6 +54,9 @@ struct ClusteredPcaOptions {
   int iterations_per_component = 10;
   /// Classification + PCA + redistribution passes after the iterative stage (adaptive).
   int adaptive_iterations = 5;
+  /// Storage of one weight relative to one value of a stored component (adaptive): 1 when both
+  /// are floats, 0.25 for s8 weights beside f32 components. The budget is in those units.
+  double adaptive_weight_cost = 1.0;
   /// Most components one cluster may get (adaptive); 0: 4 n' (at least 1), capped by cols.
   int adaptive_max_components = 0;
   std::uint64_t seed = 0;
