@@ -39,7 +39,7 @@
 #include <fstream>
 #include <set>
 
-#include "conformance/synthetic_cases.h"
+#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/transfer_error.h"

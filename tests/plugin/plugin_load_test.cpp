@@ -17,7 +17,7 @@
 #include <sstream>
 #include <string>
 
-#include "conformance/synthetic_cases.h"
+#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"

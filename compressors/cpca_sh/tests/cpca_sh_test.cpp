@@ -14,7 +14,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "conformance/synthetic_cases.h"
+#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/transfer_error.h"
