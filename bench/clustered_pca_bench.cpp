@@ -206,9 +206,13 @@ void BM_ClassifyNaive(benchmark::State& state) {
 }
 
 BENCHMARK(BM_Compress)->Name("cpca/compress")->Iterations(1)->Unit(benchmark::kSecond);
-BENCHMARK(BM_ClassifyFused)->Name("cpca/classify/fused")->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_ClassifyFused)
+    ->Name("cpca/classify/fused")
+    ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
-BENCHMARK(BM_ClassifyNaive)->Name("cpca/classify/naive")->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_ClassifyNaive)
+    ->Name("cpca/classify/naive")
+    ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 
 }  // namespace

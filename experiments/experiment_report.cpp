@@ -350,8 +350,8 @@ void curves_section(std::string& md, const json& result, const fs::path& folder)
     const std::string backend = c.at("backend"), x = c.at("x"), y = c.at("y");
     const std::string series = c.at("series"), panel = c.at("panel");
     const std::string title = c.value("title", std::string());
-    md += fmt::format("### {}\n\n", title.empty() ? fmt::format("`{}`: {} against {}", backend, y, x)
-                                                    : title);
+    md += fmt::format("### {}\n\n",
+                      title.empty() ? fmt::format("`{}`: {} against {}", backend, y, x) : title);
     for (const auto& scene : result.at("scenes")) {
       const std::string name = scene.at("scene");
       std::string rows;
@@ -367,10 +367,10 @@ void curves_section(std::string& md, const json& result, const fs::path& folder)
                             fmt_num(p.value("compress_seconds", json(nullptr)), "{:.2f}"));
       }
       if (rows.empty()) continue;
-      md += fmt::format("{}:\n\n| {} | {} | {} | {} | storage MB | compress s |\n"
-                        "|---|---|---:|---:|---:|---:|\n{}\n",
-                        name, panel.empty() ? "-" : panel, series.empty() ? "-" : series, x, y,
-                        rows);
+      md += fmt::format(
+          "{}:\n\n| {} | {} | {} | {} | storage MB | compress s |\n"
+          "|---|---|---:|---:|---:|---:|\n{}\n",
+          name, panel.empty() ? "-" : panel, series.empty() ? "-" : series, x, y, rows);
       const std::string plot = fmt::format("curves{}-{}.png", n, name);
       if (fs::exists(folder / plot)) md += fmt::format("![{} against {}]({})\n\n", y, x, plot);
     }

@@ -22,11 +22,10 @@ const std::vector<std::string> kBlenderWorlds = {"city",  "courtyard", "forest",
                                                  "night", "studio",    "sunrise", "sunset"};
 
 const std::set<std::string> kTopKeys = {
-    "name",       "title",     "kind",    "scenes",      "scene_grid",   "backends",
-    "exclude",    "params",    "grid",    "knob_points", "environments", "views",
-    "image",      "btf",       "repeats", "timing",      "images",       "fps",
-    "fps_frames", "reference", "target",  "paper",       "paper_source", "variant",
-    "points",     "curves"};
+    "name",    "title",        "kind",        "scenes",       "scene_grid", "backends",  "exclude",
+    "params",  "grid",         "knob_points", "environments", "views",      "image",     "btf",
+    "repeats", "timing",       "images",      "fps",          "fps_frames", "reference", "target",
+    "paper",   "paper_source", "variant",     "points",       "curves"};
 const std::set<std::string> kCurveKeys = {"backend", "x",     "y",     "series",
                                           "panel",   "log_x", "log_y", "title"};
 
@@ -365,18 +364,19 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
       const auto str = [&](const char* key, std::string& out, bool required) {
         const toml::node* n = ct->get(key);
         if (!n) {
-          if (required)
-            throw InputError(file, line_of(e) + fmt::format("a curve needs '{}'", key));
+          if (required) throw InputError(file, line_of(e) + fmt::format("a curve needs '{}'", key));
           return;
         }
         auto v = n->value_exact<std::string>();
-        if (!v) throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a string", key));
+        if (!v)
+          throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a string", key));
         out = *v;
       };
       const auto flag = [&](const char* key, bool& out) {
         if (const toml::node* n = ct->get(key)) {
           auto v = n->value_exact<bool>();
-          if (!v) throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a boolean", key));
+          if (!v)
+            throw InputError(file, line_of(*n) + fmt::format("curve '{}' must be a boolean", key));
           out = *v;
         }
       };

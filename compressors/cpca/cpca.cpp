@@ -37,7 +37,8 @@ class CpcaCompressor final : public Compressor {
     ClusteredPcaOptions o = p_.options;
     // A small transfer gets what it can hold: one row per cluster at most, and no more vectors
     // than the light has pixels (README, "Parameters").
-    o.clusters = static_cast<int>(std::min<std::size_t>(o.clusters, std::max<std::size_t>(1, t.rows())));
+    o.clusters =
+        static_cast<int>(std::min<std::size_t>(o.clusters, std::max<std::size_t>(1, t.rows())));
     o.components = static_cast<int>(std::min<std::size_t>(o.components, t.cols()));
     if (t.rows() == 0) throw ParameterError(fmt::format("{}: the transfer has no rows", kName));
     // The bar advances by passes: the planned count (a stage that converges early skips ahead).
@@ -60,12 +61,12 @@ class CpcaCompressor final : public Compressor {
     log_debug(
         "{}: {} clusters, {} weights; vq {:.2f} s, classify {:.2f} s ({} passes, {:.1f} GFLOP/s), "
         "pca {:.2f} s ({} updates), weights {:.2f} s",
-        kName, model.clusters.size(), model.weight_count(), tm.vq, tm.classify,
-        tm.classify_passes, tm.classify > 0 ? tm.classify_flops / tm.classify * 1e-9 : 0.0, tm.pca,
-        tm.pca_updates, tm.weights);
-    auto out = std::make_unique<CpcaTransfer>(
-        encode(model, rows, t.vertex_count(), t.local_count(), static_cast<int>(t.cols()),
-               p_.options.method, p_.format));
+        kName, model.clusters.size(), model.weight_count(), tm.vq, tm.classify, tm.classify_passes,
+        tm.classify > 0 ? tm.classify_flops / tm.classify * 1e-9 : 0.0, tm.pca, tm.pca_updates,
+        tm.weights);
+    auto out = std::make_unique<CpcaTransfer>(encode(model, rows, t.vertex_count(), t.local_count(),
+                                                     static_cast<int>(t.cols()), p_.options.method,
+                                                     p_.format));
     progress.finish();
     return out;
   }
@@ -174,7 +175,8 @@ CpcaArrays encode(const ClusteredPca& model, const RowSet& rows, std::size_t ver
   for (std::size_t c = 0; c < model.clusters.size(); ++c) {
     const CpcaCluster& cl = model.clusters[c];
     float* rep = a.reps.data() + static_cast<std::size_t>(a.first[c]) * n;
-    for (std::size_t j = 0; j < n; ++j) rep[j] = static_cast<float>(cl.mean[static_cast<Eigen::Index>(j)]);
+    for (std::size_t j = 0; j < n; ++j)
+      rep[j] = static_cast<float>(cl.mean[static_cast<Eigen::Index>(j)]);
     for (int i = 0; i < cl.k(); ++i) {
       float* v = rep + static_cast<std::size_t>(i + 1) * n;
       for (std::size_t j = 0; j < n; ++j)
@@ -232,8 +234,7 @@ CpcaArrays encode(const ClusteredPca& model, const RowSet& rows, std::size_t ver
   }
   std::vector<std::uint64_t> offsets(a.weight_offsets.begin(), a.weight_offsets.end());
   const double se = affine_codebook_squared_error(rows, a.ids, reps, a.first, w, offsets);
-  a.frobenius_error =
-      model.total_squared_norm > 0 ? std::sqrt(se / model.total_squared_norm) : 0.0;
+  a.frobenius_error = model.total_squared_norm > 0 ? std::sqrt(se / model.total_squared_norm) : 0.0;
   return a;
 }
 
@@ -327,12 +328,10 @@ void CpcaTransfer::save(ArchiveWriter& archive) const {
   archive.add_section("vector_counts", std::move(counts));
   switch (a_.id_bytes()) {
     case 1:
-      archive.add_section("cluster_ids",
-                          std::vector<std::uint8_t>(a_.ids.begin(), a_.ids.end()));
+      archive.add_section("cluster_ids", std::vector<std::uint8_t>(a_.ids.begin(), a_.ids.end()));
       break;
     case 2:
-      archive.add_section("cluster_ids",
-                          std::vector<std::uint16_t>(a_.ids.begin(), a_.ids.end()));
+      archive.add_section("cluster_ids", std::vector<std::uint16_t>(a_.ids.begin(), a_.ids.end()));
       break;
     default:
       archive.add_section("cluster_ids", a_.ids);
@@ -384,15 +383,14 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
     throw fail(fmt::format("{} vertices x M = {} rows do not fit the relight's u32 row index",
                            a.vertices, a.local_count));
   const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
-  if (clusters > rows)
-    throw fail(fmt::format("{} clusters for {} rows", clusters, rows));
+  if (clusters > rows) throw fail(fmt::format("{} clusters for {} rows", clusters, rows));
   const auto counts = r.section<std::uint16_t>("vector_counts", clusters);
   a.first.assign(clusters + 1, 0);
   std::uint64_t reps = 0;
   for (std::size_t c = 0; c < clusters; ++c) {
     if (counts[c] > a.pixel_count)
-      throw fail(fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c],
-                             a.pixel_count));
+      throw fail(
+          fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c], a.pixel_count));
     reps += 1u + counts[c];
     if (reps > kU32) throw fail("the representative count overflows u32");
     a.first[c + 1] = static_cast<std::uint32_t>(reps);
@@ -449,7 +447,12 @@ CompressorEntry registry_entry() {
       "cluster a mean and n' PCA vectors; static, iterative or adaptive";
   e.params = {
       {"clusters", ParamType::kInt, "32", 1.0, 65536.0, {}, "clusters m_c"},
-      {"vectors", ParamType::kInt, "8", 0.0, 256.0, {},
+      {"vectors",
+       ParamType::kInt,
+       "8",
+       0.0,
+       256.0,
+       {},
        "PCA vectors n' per cluster (adaptive: the budget is the bytes n' per cluster store, "
        "weights and vectors); 0 is pure VQ"},
       {"method",
@@ -462,13 +465,33 @@ CompressorEntry registry_entry() {
        "approximation error, PCA after every classification, vectors added one at a time "
        "(4.2); adaptive = iterative, then vectors redistributed by D_i^2 / (bytes of the "
        "vector's weights and its N floats) under equal storage (4.3 with the cost model of 4.1)"},
-      {"vq_iterations", ParamType::kInt, "20", 0.0, 1000.0, {},
+      {"vq_iterations",
+       ParamType::kInt,
+       "20",
+       0.0,
+       1000.0,
+       {},
        "Lloyd iterations of the LBG vector quantisation"},
-      {"iterations_per_vector", ParamType::kInt, "10", 0.0, 1000.0, {},
+      {"iterations_per_vector",
+       ParamType::kInt,
+       "10",
+       0.0,
+       1000.0,
+       {},
        "classification + PCA passes for each added vector (the paper: 10-20)"},
-      {"adaptive_iterations", ParamType::kInt, "5", 0.0, 1000.0, {},
+      {"adaptive_iterations",
+       ParamType::kInt,
+       "5",
+       0.0,
+       1000.0,
+       {},
        "redistribution passes of the adaptive method"},
-      {"adaptive_max_vectors", ParamType::kInt, "0", 0.0, 1024.0, {},
+      {"adaptive_max_vectors",
+       ParamType::kInt,
+       "0",
+       0.0,
+       1024.0,
+       {},
        "most vectors one cluster may get (adaptive); 0: 4 n'"},
       {"weights",
        ParamType::kEnum,
@@ -497,8 +520,9 @@ CompressorEntry registry_entry() {
                                                     {"float16", WeightFormat::kFloat16},
                                                     {"s8", WeightFormat::kS8}});
     // A stored weight against a stored representative value (f32), for the adaptive budget.
-    c.options.adaptive_weight_cost =
-        c.format == WeightFormat::kFloat32 ? 1.0 : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
+    c.options.adaptive_weight_cost = c.format == WeightFormat::kFloat32
+                                         ? 1.0
+                                         : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
     return std::make_unique<CpcaCompressor>(std::move(c));
   };
   e.load = &CpcaTransfer::load;

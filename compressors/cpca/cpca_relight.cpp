@@ -13,7 +13,9 @@ typedef float Float4 __attribute__((vector_size(16)));
 
 constexpr std::size_t kLanes = 64;
 
-Float4 to_float4(const Rgb& v) { return Float4{v.x, v.y, v.z, 0.f}; }
+Float4 to_float4(const Rgb& v) {
+  return Float4{v.x, v.y, v.z, 0.f};
+}
 
 struct Blend {
   const CpcaArrays& a;

@@ -515,8 +515,8 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   std::uint64_t reps = 0;
   for (std::size_t c = 0; c < clusters; ++c) {
     if (counts[c] > a.signal_dim())
-      throw fail(fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c],
-                             a.signal_dim()));
+      throw fail(
+          fmt::format("cluster {} has {} vectors of dimension {}", c, counts[c], a.signal_dim()));
     reps += 1u + counts[c];
     if (reps > kU32) throw fail("the representative count overflows u32");
     a.first[c + 1] = static_cast<std::uint32_t>(reps);
@@ -682,8 +682,9 @@ CompressorEntry registry_entry() {
     c.format = p.get_enum<WeightFormat>("weights", {{"float32", WeightFormat::kFloat32},
                                                     {"float16", WeightFormat::kFloat16},
                                                     {"s8", WeightFormat::kS8}});
-    c.options.adaptive_weight_cost =
-        c.format == WeightFormat::kFloat32 ? 1.0 : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
+    c.options.adaptive_weight_cost = c.format == WeightFormat::kFloat32
+                                         ? 1.0
+                                         : (c.format == WeightFormat::kFloat16 ? 0.5 : 0.25);
     c.projection = p.get_enum<Projection>(
         "projection", {{"zero", Projection::kZero}, {"least_squares", Projection::kLeastSquares}});
     c.metric = p.get_enum<Metric>(

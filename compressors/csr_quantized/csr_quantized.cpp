@@ -174,7 +174,8 @@ std::unique_ptr<CompressedTransfer> CsrQuantizedTransfer::load(const ArchiveRead
   if (!(std::isfinite(q.max_entry_error) && q.max_entry_error >= 0 &&
         std::isfinite(q.frobenius_error) && q.frobenius_error >= 0))
     throw fail("the error statistics are not finite non-negative numbers");
-  if (q.vertices > std::numeric_limits<std::uint32_t>::max() / static_cast<std::uint64_t>(q.local_count))
+  if (q.vertices >
+      std::numeric_limits<std::uint32_t>::max() / static_cast<std::uint64_t>(q.local_count))
     throw fail(fmt::format("{} vertices x M = {} rows do not fit the relight's u32 row index",
                            q.vertices, q.local_count));
   const std::uint64_t rows = q.vertices * static_cast<std::uint64_t>(q.local_count);

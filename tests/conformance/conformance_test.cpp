@@ -39,7 +39,6 @@
 #include <fstream>
 #include <set>
 
-#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/transfer_error.h"
@@ -49,6 +48,7 @@
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 #include "support/conformance_helpers.h"
+#include "support/synthetic_cases.h"
 #include "support/temp_dir.h"
 #include "support/test_plugins.h"
 

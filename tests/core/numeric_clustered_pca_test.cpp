@@ -274,8 +274,8 @@ TEST(ClusteredPca, AffineCodebookErrorIsTheExplicitReconstructionError) {
       v += w[r.weight_offsets[static_cast<std::size_t>(p)] + i] * reps.row(first[c] + 1 + i);
     direct += (v - s.dense.row(p)).squaredNorm();
   }
-  const double e = affine_codebook_squared_error(s.set(), r.assignments, reps, first, w,
-                                                 r.weight_offsets);
+  const double e =
+      affine_codebook_squared_error(s.set(), r.assignments, reps, first, w, r.weight_offsets);
   EXPECT_NEAR(e, direct, 1e-10 * s.dense.squaredNorm());
   EXPECT_GT(e, r.squared_error) << "rounding the weights must cost something";
   std::vector<std::uint32_t> bad = r.assignments;

@@ -373,8 +373,8 @@ log_y = true
     const double declared = p.at("frobenius_se_declared").get<double>();
     const double measured = p.at("frobenius_se").get<double>();
     // se = rel^2 ||T||^2, so its standard error is 2 stderr(rel) se / rel.
-    const double stderr_se = 2 * p.at("frobenius_stderr").get<double>() * measured /
-                             p.at("frobenius_rel").get<double>();
+    const double stderr_se =
+        2 * p.at("frobenius_stderr").get<double>() * measured / p.at("frobenius_rel").get<double>();
     EXPECT_GT(declared, 0.0);
     // The harness's estimate agrees with the declared value within its own standard error.
     EXPECT_NEAR(measured, declared, 5 * stderr_se + 1e-3 * declared);

@@ -17,7 +17,6 @@
 #include <sstream>
 #include <string>
 
-#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
@@ -26,6 +25,7 @@
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/transfer/exact_relight.h"
+#include "support/synthetic_cases.h"
 #include "support/temp_dir.h"
 
 namespace prt {

@@ -66,8 +66,8 @@ double stored_weight(const CpcaArrays& a, std::size_t r, std::size_t i) {
 // T~ from the stored arrays, densely, in double.
 Eigen::MatrixXd reconstruct(const CpcaArrays& a) {
   const auto n = static_cast<std::size_t>(a.pixel_count);
-  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(a.rows()),
-                                            static_cast<Eigen::Index>(n));
+  Eigen::MatrixXd t =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(a.rows()), static_cast<Eigen::Index>(n));
   for (std::size_t r = 0; r < a.rows(); ++r) {
     const std::uint32_t c = a.ids[r];
     for (std::size_t j = 0; j < n; ++j) t(r, j) = a.reps[a.first[c] * n + j];
@@ -94,7 +94,7 @@ const std::vector<Params> kVariants = {
     {{"clusters", "6"}, {"vectors", "3"}, {"method", "iterative"}, {"weights", "float16"}},
     {{"clusters", "5"}, {"vectors", "2"}, {"method", "adaptive"}, {"weights", "s8"}},
     {{"clusters", "300"}, {"vectors", "1"}, {"method", "static"}},  // u16 ids
-    {{"clusters", "4"}, {"vectors", "0"}},                           // pure VQ
+    {{"clusters", "4"}, {"vectors", "0"}},                          // pure VQ
 };
 
 std::string describe(const Params& p) {
@@ -133,9 +133,8 @@ TEST(Cpca, RelightIsReconstructThenMultiply) {
 TEST(Cpca, SpanningSubspaceIsExact) {
   const TransferMatrix t = random_transfer(9, RandomTransferSpec{6, 2, 3, 2, 0.6, {}});
   ASSERT_LE(t.rows(), t.cols());
-  const auto ct = compress(t, {{"clusters", "1"},
-                               {"vectors", std::to_string(t.rows() - 1)},
-                               {"method", "static"}});
+  const auto ct = compress(
+      t, {{"clusters", "1"}, {"vectors", std::to_string(t.rows() - 1)}, {"method", "static"}});
   const Eigen::MatrixXd d = dense(t);
   EXPECT_LT((reconstruct(arrays(*ct)) - d).cwiseAbs().maxCoeff(), 1e-6);
   EXPECT_LT(*ct->expected_frobenius_error(), 1e-6);
@@ -206,10 +205,8 @@ TEST(Cpca, StorageIsTheDocumentedLayout) {
     EXPECT_EQ(ct->storage().total_bytes(), rows * 2 + rows * 1 * 2 + 300 * 2 * n * 4);
   }
   {
-    const auto ct = compress(t, {{"clusters", "5"},
-                                 {"vectors", "2"},
-                                 {"method", "adaptive"},
-                                 {"weights", "s8"}});
+    const auto ct = compress(
+        t, {{"clusters", "5"}, {"vectors", "2"}, {"method", "adaptive"}, {"weights", "s8"}});
     const CpcaArrays& a = arrays(*ct);
     // The adaptive budget: s8 weights (a quarter of a float each) and vectors together stay
     // within what 2 vectors per cluster store.
@@ -221,9 +218,8 @@ TEST(Cpca, StorageIsTheDocumentedLayout) {
       budget += (0.25 * static_cast<double>(members) + static_cast<double>(n)) * 2;
     }
     EXPECT_LE(used, budget * (1 + 1e-12)) << "the adaptive budget";
-    const std::uint64_t expected =
-        rows + a.weight_values.size() + rows * 4 + a.rep_count() * n * 4 +
-        (a.uniform_vectors() < 0 ? 5 * 2 : 0);
+    const std::uint64_t expected = rows + a.weight_values.size() + rows * 4 +
+                                   a.rep_count() * n * 4 + (a.uniform_vectors() < 0 ? 5 * 2 : 0);
     EXPECT_EQ(ct->storage().total_bytes(), expected);
   }
 }

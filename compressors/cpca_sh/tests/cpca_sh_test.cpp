@@ -14,7 +14,6 @@
 #include <cstring>
 #include <filesystem>
 
-#include "support/synthetic_cases.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/transfer_error.h"
@@ -26,6 +25,7 @@
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 #include "support/conformance_helpers.h"
+#include "support/synthetic_cases.h"
 #include "support/temp_dir.h"
 
 namespace prt::cpca_sh {

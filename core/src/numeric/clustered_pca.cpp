@@ -266,7 +266,9 @@ class Engine {
     // its 25-D signals; for T's 6,144-D rows the representatives dominate and must count.)
     const auto n = static_cast<double>(n_);
     const double w = o_.adaptive_weight_cost;
-    const auto cost_of = [&](const CpcaCluster& cl) { return w * static_cast<double>(cl.count) + n; };
+    const auto cost_of = [&](const CpcaCluster& cl) {
+      return w * static_cast<double>(cl.count) + n;
+    };
     double budget = 0;
     for (const CpcaCluster& cl : clusters_) budget += cost_of(cl) * o_.components;
     // Round-off must not let the iterative allocation itself miss the budget.
@@ -287,8 +289,8 @@ class Engine {
         if (cl.count == 0) continue;
         for (Eigen::Index i = 0; i < cl.eigenvalues.size(); ++i) {
           if (cl.eigenvalues[i] > 0.0) {
-            cand.push_back({cl.eigenvalues[i] / cost_of(cl),
-                            static_cast<std::uint32_t>(c), static_cast<int>(i)});
+            cand.push_back({cl.eigenvalues[i] / cost_of(cl), static_cast<std::uint32_t>(c),
+                            static_cast<int>(i)});
           }
         }
       }
@@ -305,8 +307,10 @@ class Engine {
       }
       for (std::size_t c = 0; c < nc; ++c) {
         CpcaCluster& cl = clusters_[c];
-        cl.components = cl.components.leftCols(std::min<Eigen::Index>(k[c], cl.components.cols())).eval();
-        cl.eigenvalues = cl.eigenvalues.head(std::min<Eigen::Index>(k[c], cl.eigenvalues.size())).eval();
+        cl.components =
+            cl.components.leftCols(std::min<Eigen::Index>(k[c], cl.components.cols())).eval();
+        cl.eigenvalues =
+            cl.eigenvalues.head(std::min<Eigen::Index>(k[c], cl.eigenvalues.size())).eval();
       }
       // The error of this pass's classification (under the previous pass's counts).
       record("adaptive", o_.components, it, moved);
@@ -356,7 +360,8 @@ class Engine {
     for (double e : err) out_.squared_error += e;
     out_.total_squared_norm = norms_.sum();
     int mean_k = 0;
-    if (m_ > 0) mean_k = static_cast<int>(std::lround(static_cast<double>(out_.weights.size()) / m_));
+    if (m_ > 0)
+      mean_k = static_cast<int>(std::lround(static_cast<double>(out_.weights.size()) / m_));
     CpcaPass pass{"final", mean_k, 0, out_.squared_error, 0};
     out_.history.push_back(pass);
     if (o_.on_pass) o_.on_pass(pass);
@@ -389,8 +394,7 @@ ClusteredPca clustered_pca(const RowSet& points, const ClusteredPcaOptions& o) {
                                      o.components, points.cols()));
   }
   if (o.vq_iterations < 0 || o.iterations_per_component < 0 || o.adaptive_iterations < 0 ||
-      o.adaptive_max_components < 0 || o.pca_iterations_per_pass < 0 ||
-      o.pca_oversampling < 0) {
+      o.adaptive_max_components < 0 || o.pca_iterations_per_pass < 0 || o.pca_oversampling < 0) {
     throw ParameterError("clustered_pca: iteration counts must be >= 0");
   }
   if (!(o.adaptive_weight_cost > 0.0) || !std::isfinite(o.adaptive_weight_cost)) {

@@ -30,8 +30,12 @@ PRT_VECTOR_CLONES void axpy_f64(double a, const double* x, double* out, std::siz
 
 namespace {
 
-void axpy(float a, const float* x, float* out, std::size_t n) { axpy_f32(a, x, out, n); }
-void axpy(double a, const double* x, double* out, std::size_t n) { axpy_f64(a, x, out, n); }
+void axpy(float a, const float* x, float* out, std::size_t n) {
+  axpy_f32(a, x, out, n);
+}
+void axpy(double a, const double* x, double* out, std::size_t n) {
+  axpy_f64(a, x, out, n);
+}
 
 template <class Scalar>
 using RowMajor = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -43,8 +47,8 @@ void check_product(const RowSet& rows, const RowMajor<Scalar>& b, std::size_t y_
                                      rows.cols(), b.rows()));
   }
   if (y_size != static_cast<std::size_t>(b.cols())) {
-    throw ParameterError(fmt::format("multiply_rows: the output has {} entries, the product {}",
-                                     y_size, b.cols()));
+    throw ParameterError(
+        fmt::format("multiply_rows: the output has {} entries, the product {}", y_size, b.cols()));
   }
 }
 
@@ -52,9 +56,8 @@ template <class Access, class Scalar>
 void row_times(const Access& a, std::size_t i, const RowMajor<Scalar>& b, Scalar* y) {
   const auto k = static_cast<std::size_t>(b.cols());
   std::fill(y, y + k, Scalar(0));
-  a.for_each(i, [&](std::size_t j, double v) {
-    axpy(static_cast<Scalar>(v), b.data() + j * k, y, k);
-  });
+  a.for_each(
+      i, [&](std::size_t j, double v) { axpy(static_cast<Scalar>(v), b.data() + j * k, y, k); });
 }
 
 template <class Scalar>

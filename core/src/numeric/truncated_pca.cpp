@@ -1,10 +1,9 @@
 #include "prtlab/numeric/truncated_pca.h"
 
+#include <Spectra/SymEigsSolver.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-
-#include <Spectra/SymEigsSolver.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -16,8 +15,8 @@
 #include <type_traits>
 
 #include "numeric/row_access.h"
-#include "prtlab/numeric/row_products.h"
 #include "prtlab/base/error.h"
+#include "prtlab/numeric/row_products.h"
 
 namespace prt {
 
@@ -280,8 +279,8 @@ void lanczos_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k,
                std::max(o.tolerance, 1e-14));
   if (eigs.info() != Spectra::CompInfo::Successful) {
     throw Error(fmt::format(
-        "truncated_pca: Spectra's Lanczos did not converge to {} eigenpairs within {} restarts",
-        k, o.max_iterations));
+        "truncated_pca: Spectra's Lanczos did not converge to {} eigenpairs within {} restarts", k,
+        o.max_iterations));
   }
   out.iterations = static_cast<int>(eigs.num_iterations());
   out.components = eigs.eigenvectors();

@@ -37,7 +37,7 @@ namespace prt {
 enum class CpcaMethod { kStatic, kIterative, kAdaptive };
 
 struct CpcaPass {
-  std::string stage;  ///< "vq", "iterative", "adaptive", "final"
+  std::string stage;   ///< "vq", "iterative", "adaptive", "final"
   int components = 0;  ///< the (mean) components per cluster during the pass
   int iteration = 0;   ///< within the stage
   double squared_error = 0;
@@ -103,9 +103,9 @@ struct ClusteredPca {
   /// start at weight_offsets[p] (size points + 1).
   std::vector<double> weights;
   std::vector<std::uint64_t> weight_offsets;
-  double squared_error = 0;        ///< sum_p ||x_p - x~_p||^2, in double
-  double total_squared_norm = 0;   ///< sum_p ||x_p||^2 (the relative error's denominator)
-  std::vector<CpcaPass> history;   ///< every pass in order
+  double squared_error = 0;       ///< sum_p ||x_p - x~_p||^2, in double
+  double total_squared_norm = 0;  ///< sum_p ||x_p||^2 (the relative error's denominator)
+  std::vector<CpcaPass> history;  ///< every pass in order
   CpcaPhaseTimes times;
   /// Stored weights: sum_c m_c k_c (m n' for static and iterative; adaptive keeps
   /// sum_c (m_c + n) k_c, weights and vectors together, within that of the iterative result).
@@ -122,7 +122,8 @@ ClusteredPca clustered_pca(const RowSet& points, const ClusteredPcaOptions& opti
 ///     x~_p = rep_0 + sum_i weights[weight_offsets[p] + i] rep_{1+i}   (reps of its cluster).
 /// Returns sum_p ||x_p - x~_p||^2 in double, for representatives and weights as stored
 /// (rounded to float, quantised): components need not be orthonormal.
-double affine_codebook_squared_error(const RowSet& points, std::span<const std::uint32_t> assignments,
+double affine_codebook_squared_error(const RowSet& points,
+                                     std::span<const std::uint32_t> assignments,
                                      const RowMajorMatrixXd& reps,
                                      std::span<const std::uint32_t> first,
                                      std::span<const double> weights,
