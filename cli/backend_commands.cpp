@@ -1,5 +1,6 @@
 // prtlab list / prtlab compress: the compressor backends.
 #include <cstdio>
+#include <cstdlib>
 
 #include "backend_description.h"
 #include "commands.h"
@@ -10,8 +11,11 @@
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/opencl/cl_device.h"
+#include "prtlab/render/frame_renderer.h"
+#include "prtlab/render/image_error.h"
 #include "prtlab/storage/data_paths.h"
 #include "prtlab/transfer/scene_transfer.h"
+#include "scene_bench.h"
 
 namespace prt::cli {
 namespace {
@@ -31,6 +35,9 @@ struct CompressCli {
   int lights = 8;
   int repeat = 20;
   std::string save;
+  bool no_image = false;
+  std::string image_environment = "courtyard";
+  std::vector<int> image_size = {256, 192};
 };
 
 // A material backend in `prtlab list`: the fields transfer backends have, without the
@@ -103,6 +110,65 @@ std::optional<ClContext> open_device_from_options() {
 
 namespace {
 
+// Parameter values as written ("12", "0", "0.0"): equal as strings, or as numbers.
+bool same_value(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  char* end_a = nullptr;
+  char* end_b = nullptr;
+  const double x = std::strtod(a.c_str(), &end_a);
+  const double y = std::strtod(b.c_str(), &end_b);
+  return !a.empty() && !b.empty() && *end_a == '\0' && *end_b == '\0' && x == y;
+}
+
+// The papers' numbers for this backend on this scene at these parameters.
+std::vector<const PublishedNumber*> published_numbers(
+    const CompressorEntry& entry, const std::string& scene,
+    const std::map<std::string, std::string>& params) {
+  std::vector<const PublishedNumber*> out;
+  for (const auto& p : entry.published) {
+    if (p.scene != scene) continue;
+    bool match = true;
+    for (const auto& [k, v] : p.params) {
+      const auto it = params.find(k);
+      match = match && it != params.end() && same_value(it->second, v);
+    }
+    if (match) out.push_back(&p);
+  }
+  return out;
+}
+
+struct ImageComparison {
+  std::string environment;
+  int width = 0, height = 0;
+  ImageError error;
+};
+
+// The backend's image against the exact one (the `uncompressed` reference) at the scene's first
+// view under one environment, through the frame loop the experiments use (scene_bench.h).
+ImageComparison compare_image(const CompressCli& o, std::shared_ptr<const CompressedTransfer> ct,
+                              ClContext* ctx, StageCache& cache) {
+  experiments::ExperimentSpec spec;
+  spec.name = "compress";
+  spec.scenes = {o.scene};
+  spec.backends = {o.backend};
+  spec.environments = {experiments::parse_environment("--image-environment", o.image_environment)};
+  spec.width = o.image_size.at(0);
+  spec.height = o.image_size.at(1);
+  spec.timing = false;
+  spec.repeats = 1;
+  const std::filesystem::path file = resolve_scene(o.scene);
+  const SceneDesc desc = parse_scene(file);
+  const experiments::SceneVariant variant{desc.name, desc.name, file, {}};
+  const experiments::BenchOptions bo{ctx, CacheMode::kUse, !global_options().quiet};
+  const experiments::SceneBench bench = experiments::prepare_bench(variant, spec, cache, bo);
+  FrameRenderer renderer(bench.scene.mesh, bench.materials, std::move(ct), ctx);
+  renderer.set_camera(bench.cameras.front());
+  renderer.set_environment(bench.lights.front().radiance);
+  (void)renderer.render();
+  return {bench.lights.front().name, spec.width, spec.height,
+          image_error(renderer.image(), bench.exact_images.front(), bench.masks.front())};
+}
+
 void run_compress(const CompressCli& o) {
   const auto params = ParamSet::parse_assignments(o.params);
   // Validate the backend and parameters before any expensive stage.
@@ -117,7 +183,7 @@ void run_compress(const CompressCli& o) {
   popt.show_progress = !global_options().quiet;
   const PreparedScene scene = prepare_scene(desc, entry.inputs, cache, popt);
   const TransferMatrix& t = scene.transfer.result.transfer;
-  const CompressionResult cr =
+  CompressionResult cr =
       compress_cached(o.backend, params, scene.input(entry), scene.transfer.key, cache,
                       o.force ? CacheMode::kRefresh : CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
@@ -130,6 +196,11 @@ void run_compress(const CompressCli& o) {
   const StorageReport storage = cr.compressed->storage();
   const double mflops = cr.compressed->flops_per_relight() / 1e6;
   const double exact_mflops = 2.0 * static_cast<double>(t.nnz()) / 1e6;
+  const auto paper = published_numbers(entry, desc.name, cr.params);
+  std::shared_ptr<const CompressedTransfer> compressed = std::move(cr.compressed);
+  const std::optional<ImageComparison> image =
+      o.no_image ? std::nullopt
+                 : std::optional(compare_image(o, compressed, ctx ? &*ctx : nullptr, cache));
   if (o.json) {
     nlohmann::json j;
     j["scene"] = desc.name;
@@ -148,8 +219,8 @@ void run_compress(const CompressCli& o) {
     j["dense_bytes"] = t.dense_bytes();
     j["data_percent"] =
         100.0 * static_cast<double>(storage.total_bytes()) / static_cast<double>(t.dense_bytes());
-    j["declared_error_bound"] = cr.compressed->declared_error_bound();
-    j["declared_error_norm"] = to_string(cr.compressed->declared_error_norm());
+    j["declared_error_bound"] = compressed->declared_error_bound();
+    j["declared_error_norm"] = to_string(compressed->declared_error_norm());
     j["rel_l2_error_mean"] = ev.mean_rel_l2;
     j["rel_l2_error_max"] = ev.max_rel_l2;
     nlohmann::json per = nlohmann::json::array();
@@ -168,6 +239,18 @@ void run_compress(const CompressCli& o) {
     j["opencl_vs_cpp_rel_l2"] =
         ev.opencl_vs_cpp ? nlohmann::json(*ev.opencl_vs_cpp) : nlohmann::json(nullptr);
     j["device"] = ctx ? nlohmann::json(ctx->info()) : nlohmann::json(nullptr);
+    if (image) {
+      j["image"] = {{"environment", image->environment},
+                    {"width", image->width},
+                    {"height", image->height},
+                    {"error", to_json(image->error)}};
+    } else {
+      j["image"] = nullptr;
+    }
+    nlohmann::json pj = nlohmann::json::array();
+    for (const auto* p : paper)
+      pj.push_back({{"params", p->params}, {"text", p->text}, {"source", p->source}});
+    j["paper"] = pj;
     print_json(std::move(j));
     return;
   }
@@ -180,11 +263,13 @@ void run_compress(const CompressCli& o) {
       100.0 * storage.total_bytes() / static_cast<double>(t.dense_bytes()), t.dense_bytes() / 1e6);
   for (const auto& c : storage.components)
     std::printf("    %-14s %10.2f MB  %s\n", c.name.c_str(), c.bytes / 1e6, c.layout.c_str());
+  for (const auto* p : paper)
+    std::printf("paper            %s (%s)\n", p->text.c_str(), p->source.c_str());
   std::printf("MFLOPs/relight   %.2f (exact %.2f: %.1f %%)\n", mflops, exact_mflops,
               100.0 * mflops / exact_mflops);
   std::printf(
       "error            rel. L2 mean %.3e, max %.3e over %zu lights (declared bound %.3g)\n",
-      ev.mean_rel_l2, ev.max_rel_l2, ev.errors.size(), cr.compressed->declared_error_bound());
+      ev.mean_rel_l2, ev.max_rel_l2, ev.errors.size(), compressed->declared_error_bound());
   std::printf("                 Frobenius %.3e%s, worst vertex %.3e (vertex %zu)\n",
               ev.frobenius.relative,
               ev.frobenius.exact ? " (exact)"
@@ -192,6 +277,10 @@ void run_compress(const CompressCli& o) {
                                                ev.frobenius.standard_error, ev.frobenius.relights)
                                        .c_str(),
               ev.max_vertex_rel, ev.worst_vertex);
+  if (image)
+    std::printf("image            rel. L2 %.3e, PSNR %.1f dB vs the exact image (%s, %dx%d)\n",
+                image->error.relative_l2, image->error.psnr_db, image->environment.c_str(),
+                image->width, image->height);
   std::printf("relight C++      %.3f ms (+ %.3f ms light projection)\n", ev.ms_cpp, ev.ms_project);
   if (ev.ms_opencl)
     std::printf("relight OpenCL   %.3f ms kernel on %s (vs C++: %.2e rel. L2)\n", *ev.ms_opencl,
@@ -251,6 +340,13 @@ void add_backend_commands(CLI::App& app) {
       ->check(CLI::Range(1, 100000));
   c->add_option("--save", co->save, "Also write the compressed transfer to this file");
   c->add_flag("--force", co->force, "Recompress even when the stage cache has the result");
+  c->add_flag("--no-image", co->no_image,
+              "Skip the image comparison (the backend's frame against the exact one)");
+  c->add_option("--image-environment", co->image_environment,
+                "Environment of the image comparison (a Blender world or sun:RATIO)");
+  c->add_option("--image-size", co->image_size, "Width and height of the image comparison")
+      ->expected(2)
+      ->check(CLI::Range(8, 4096));
   c->add_flag("--json", co->json, "Machine-readable output (docs/cli.md)");
   c->callback([co] { run_compress(*co); });
 }

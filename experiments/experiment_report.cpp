@@ -358,8 +358,11 @@ void curves_section(std::string& md, const json& result, const fs::path& folder)
       for (const auto& p : result.at("points")) {
         if (p.at("scene") != name || p.at("backend") != backend) continue;
         const json& cp = p.at("canonical_params");
+        // A parameter, or (for x) a points.csv column such as storage_mb.
         const auto par = [&](const std::string& k) {
-          return k.empty() ? std::string("-") : cp.value(k, std::string("?"));
+          if (k.empty()) return std::string("-");
+          if (cp.contains(k)) return cp.value(k, std::string("?"));
+          return p.contains(k) ? fmt_num(p.at(k), "{:.4g}") : std::string("?");
         };
         rows += fmt::format("| {} | {} | {} | {} | {:.3f} | {} |\n", par(panel), par(series),
                             par(x), fmt_num(p.value(y, json(nullptr)), "{:.4g}"),

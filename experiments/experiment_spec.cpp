@@ -8,6 +8,7 @@
 #include <cmath>
 #include <set>
 
+#include "point_measurement.h"
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
@@ -89,6 +90,41 @@ std::map<std::string, std::string> param_table(const fs::path& file, const toml:
   return out;
 }
 
+// `base` with the keys of `over` replacing its own (a variant replaces whole keys).
+toml::table apply_variant(const toml::table& base, const toml::table& over) {
+  toml::table out = base;
+  for (const auto& [k, v] : over) out.insert_or_assign(k, v);
+  return out;
+}
+
+toml::table load_table(const fs::path& file) {
+  if (!fs::exists(file)) throw InputError(file, "no such experiment file");
+  try {
+    return toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(file, fmt::format("line {}: {}", e.source().begin.line, e.description()));
+  }
+}
+
+// The table under `key`, nullptr when absent; an InputError when the key holds something else.
+const toml::table* table_at(const fs::path& file, const toml::table& t, std::string_view key) {
+  const toml::node* n = t.get(key);
+  if (!n) return nullptr;
+  const auto* table = n->as_table();
+  if (!table) throw InputError(file, line_of(*n) + fmt::format("'{}' must be a table", key));
+  return table;
+}
+
+void check_keys(const fs::path& file, const toml::table& t, const std::set<std::string>& allowed,
+                std::string_view where) {
+  for (const auto& [k, v] : t)
+    if (!allowed.contains(std::string(k.str())))
+      throw InputError(file, line_of(v) + fmt::format("unknown key '{}' in {} (valid: {})", k.str(),
+                                                      where, join(allowed)));
+}
+
+}  // namespace
+
 EnvironmentSpec parse_environment(const fs::path& file, const std::string& name) {
   EnvironmentSpec e;
   // "sun", "sun:RATIO" or "sun-RATIO" (not "sunset", a Blender world).
@@ -125,41 +161,6 @@ EnvironmentSpec parse_environment(const fs::path& file, const std::string& name)
   e.name = fs::path(name).stem().string();
   return e;
 }
-
-// `base` with the keys of `over` replacing its own (a variant replaces whole keys).
-toml::table apply_variant(const toml::table& base, const toml::table& over) {
-  toml::table out = base;
-  for (const auto& [k, v] : over) out.insert_or_assign(k, v);
-  return out;
-}
-
-toml::table load_table(const fs::path& file) {
-  if (!fs::exists(file)) throw InputError(file, "no such experiment file");
-  try {
-    return toml::parse_file(file.string());
-  } catch (const toml::parse_error& e) {
-    throw InputError(file, fmt::format("line {}: {}", e.source().begin.line, e.description()));
-  }
-}
-
-// The table under `key`, nullptr when absent; an InputError when the key holds something else.
-const toml::table* table_at(const fs::path& file, const toml::table& t, std::string_view key) {
-  const toml::node* n = t.get(key);
-  if (!n) return nullptr;
-  const auto* table = n->as_table();
-  if (!table) throw InputError(file, line_of(*n) + fmt::format("'{}' must be a table", key));
-  return table;
-}
-
-void check_keys(const fs::path& file, const toml::table& t, const std::set<std::string>& allowed,
-                std::string_view where) {
-  for (const auto& [k, v] : t)
-    if (!allowed.contains(std::string(k.str())))
-      throw InputError(file, line_of(v) + fmt::format("unknown key '{}' in {} (valid: {})", k.str(),
-                                                      where, join(allowed)));
-}
-
-}  // namespace
 
 std::string_view to_string(ExperimentKind k) {
   return k == ExperimentKind::kEqualStorage ? "equal_storage" : "sweep";
@@ -393,10 +394,13 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
         for (const std::string* key : {&c.x, &c.series, &c.panel}) {
           if (key->empty()) continue;
           const bool known = std::any_of(entry.params.begin(), entry.params.end(),
-                                         [&](const ParamSpec& p) { return p.key == *key; });
+                                         [&](const ParamSpec& p) { return p.key == *key; }) ||
+                             (key == &c.x && std::ranges::count(point_record_columns(), *key) > 0);
           if (!known)
-            throw InputError(file, line_of(e) + fmt::format("curve: '{}' is not a parameter of {}",
-                                                            *key, c.backend));
+            throw InputError(
+                file,
+                line_of(e) + fmt::format("curve: '{}' is not a parameter of {}{}", *key, c.backend,
+                                         key == &c.x ? " nor a points.csv column" : ""));
         }
       }
       s.curves.push_back(std::move(c));

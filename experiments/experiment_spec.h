@@ -98,6 +98,11 @@ struct ExperimentSpec {
   std::string paper_source;  ///< where those numbers come from
 };
 
+/// An environment as experiment files name it ("courtyard", a Blender world; "sun:3e4",
+/// "sunonly:3e4", the procedural sun), resolved to its EXR; `file` names the file asking, for
+/// the error.
+EnvironmentSpec parse_environment(const std::filesystem::path& file, const std::string& name);
+
 /// What a point's numbers depend on besides its backend and parameters: environments, views,
 /// image size, repeats, timing, images, fps, reference (part of every point's cache key).
 nlohmann::json evaluation_json(const ExperimentSpec& spec);

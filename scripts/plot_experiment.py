@@ -218,7 +218,9 @@ def curve_plots(result, folder):
                    and number(p.get(curve["y"])) is not None]
             if not pts:
                 continue
-            par = lambda p, k: param_value(p["canonical_params"].get(k)) if k else ""
+            # A parameter, or (x only) a points.csv column such as storage_mb.
+            par = lambda p, k: (param_value(p["canonical_params"][k]) if k in p["canonical_params"]
+                                else p.get(k)) if k else ""
             panels = sorted({par(p, curve["panel"]) for p in pts},
                             key=lambda v: (isinstance(v, str), v))
             fig, axes = plt.subplots(1, len(panels), figsize=(4.8 * len(panels), 3.9), squeeze=False,

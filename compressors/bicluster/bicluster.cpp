@@ -680,6 +680,12 @@ CompressorEntry registry_entry() {
   // 3: phase 2's row order (rows sharing biclusters adjacent), state version 3.
   // 4: the device option opencl_ids left the saved state, state version 4.
   e.version = 4;
+  e.published = {
+      {"chair",
+       {{"error", "0"}},
+       "lossless: 36.4 MB",
+       "Sun et al. 2008, Fig. 6; their chair has 16K vertices x 64 local directions"},
+  };
   return e;
 }
 

@@ -57,6 +57,58 @@ TEST_F(BackendCli, CompressUncompressedIsExact) {
   if (!j["ms_per_relight_opencl"].is_null()) {
     EXPECT_LT(j["opencl_vs_cpp_rel_l2"].get<double>(), 1e-5);
   }
+  // The image comparison renders the exact path against itself.
+  EXPECT_EQ(j["image"]["environment"], "courtyard");
+  EXPECT_EQ(j["image"]["width"].get<int>(), 256);
+  EXPECT_LT(j["image"]["error"]["relative_l2"].get<double>(), 1e-6);
+  EXPECT_TRUE(j["paper"].is_array() && j["paper"].empty());
+}
+
+// The image error of a lossy backend against the exact image, at the size and environment asked
+// for; --no-image skips it.
+TEST_F(BackendCli, CompressComparesTheImageWithTheExactOne) {
+  const auto j = run_json(
+      "-q compress tiny-sphere-plane --backend haar --param k=1 --lights 1 --repeat 1 --json "
+      "--image-size 64 48 --image-environment sun:100");
+  EXPECT_EQ(j["image"]["width"].get<int>(), 64);
+  EXPECT_EQ(j["image"]["height"].get<int>(), 48);
+  EXPECT_EQ(j["image"]["environment"], "sun-100");
+  const double err = j["image"]["error"]["relative_l2"].get<double>();
+  EXPECT_GT(err, 1e-3);
+  EXPECT_LT(err, 2.0);
+  const auto skipped = run_json(
+      "-q compress tiny-sphere-plane --backend haar --param k=1 --lights 1 --repeat 1 "
+      "--json --no-image");
+  EXPECT_TRUE(skipped["image"].is_null());
+  const auto bad = run("-q compress tiny-sphere-plane --backend haar --image-environment nowhere");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("nowhere"), std::string::npos) << bad.err;
+}
+
+// A published number is printed where backend, scene and parameters match (numerically: 0.50 is
+// 0.5), and only there.
+TEST_F(BackendCli, CompressPrintsThePapersNumberBesideOurs) {
+  const auto cli = PRTLAB_TEST_CLI_PATH;
+  const auto r = run_cli(
+      "-q compress tiny-sphere-plane --backend coo --param keep=0.50 --lights 1 --repeat 1 "
+      "--no-image",
+      dir_, env_, cli);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("paper            half of each row: 1.0 MB (made up)"), std::string::npos)
+      << r.out;
+  const auto j = nlohmann::json::parse(
+      run_cli("-q compress tiny-sphere-plane --backend coo --param keep=0.5 --lights 1 --repeat 1 "
+              "--no-image --json",
+              dir_, env_, cli)
+          .out);
+  ASSERT_EQ(j["paper"].size(), 1u);
+  EXPECT_EQ(j["paper"][0]["source"], "tests/backends/coo/coo.cpp");
+  const auto other = run_cli(
+      "-q compress tiny-sphere-plane --backend coo --param keep=0.25 --lights 1 --repeat 1 "
+      "--no-image",
+      dir_, env_, cli);
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_EQ(other.out.find("paper "), std::string::npos) << other.out;
 }
 
 TEST_F(BackendCli, RelightWithBackendMatchesExact) {

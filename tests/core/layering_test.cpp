@@ -92,7 +92,7 @@ std::string included_folder(const std::string& include, const std::string& own) 
 /// Violations of the core rules, one line each ("file: includes x (folder f), not allowed").
 std::vector<std::string> check_core(const fs::path& root, const Rules& rules) {
   std::vector<std::string> violations;
-  for (const fs::path base : {root / "core/include/prtlab", root / "core/src"}) {
+  for (const fs::path& base : {root / "core/include/prtlab", root / "core/src"}) {
     if (!fs::exists(base)) continue;
     for (const auto& entry : fs::recursive_directory_iterator(base)) {
       if (!entry.is_regular_file() || !is_source(entry.path())) continue;
@@ -177,10 +177,12 @@ TEST(Layering, TheTableNamesEveryCoreFolderAndHasNoCycle) {
   EXPECT_EQ(find_cycle(rules), "");
   for (const auto& [folder, deps] : rules)
     for (const auto& d : deps) EXPECT_TRUE(rules.contains(d)) << folder << " names unknown " << d;
-  for (const auto& entry : fs::directory_iterator(kSource / "core/include/prtlab"))
-    if (entry.is_directory())
+  for (const auto& entry : fs::directory_iterator(kSource / "core/include/prtlab")) {
+    if (entry.is_directory()) {
       EXPECT_TRUE(rules.contains(entry.path().filename().string()))
           << entry.path() << " has no row in docs/architecture.md";
+    }
+  }
 }
 
 TEST(Layering, CoreIncludesFollowTheTable) {

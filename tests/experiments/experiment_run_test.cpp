@@ -361,10 +361,15 @@ x = "clusters"
 y = "frobenius_se_declared"
 series = "vectors"
 log_y = true
+[[curves]]
+backend = "cpca"
+x = "storage_mb"
+y = "frobenius_se_declared"
 )");
   const ExperimentSpec spec = parse(f);
   ASSERT_EQ(spec.points.at("cpca").size(), 2u);
-  ASSERT_EQ(spec.curves.size(), 1u);
+  ASSERT_EQ(spec.curves.size(), 2u);
+  EXPECT_EQ(spec.curves[1].x, "storage_mb");
   EXPECT_EQ(spec.curves[0].series, "vectors");
   const RunSummary s = run_experiment(spec, options("curves"));
   const json& points = s.result.at("points");
@@ -379,11 +384,18 @@ log_y = true
     // The harness's estimate agrees with the declared value within its own standard error.
     EXPECT_NEAR(measured, declared, 5 * stderr_se + 1e-3 * declared);
   }
-  EXPECT_EQ(s.result.at("experiment").at("curves").size(), 1u);
+  EXPECT_EQ(s.result.at("experiment").at("curves").size(), 2u);
   write_experiment_report(s.folder, true, true);
-  EXPECT_NE(read(s.folder / "README.md").find("## Curves"), std::string::npos);
+  const std::string report = read(s.folder / "README.md");
+  EXPECT_NE(report.find("## Curves"), std::string::npos);
+  // The curve over a points.csv column tabulates that column's values as its x.
+  for (const auto& p : points)
+    EXPECT_NE(report.find(fmt::format("{:.4g}", p.at("storage_mb").get<double>())),
+              std::string::npos)
+        << report;
   if (python_with_matplotlib()) {
     EXPECT_TRUE(fs::exists(s.folder / "curves0-tiny-sphere-plane.png"));
+    EXPECT_TRUE(fs::exists(s.folder / "curves1-tiny-sphere-plane.png"));
   }
   // A backend with both a grid and points, and a curve naming no parameter, are refused.
   const auto bad = write_spec("bad", R"(
@@ -403,6 +415,16 @@ backend = "cpca"
 x = "colour"
 )");
   EXPECT_THROW(parse(bad2), InputError);
+  // Only x may name a points.csv column: a series must be a parameter.
+  const auto bad3 = write_spec("bad3", R"(
+name = "x"
+scenes = ["bunny"]
+[[curves]]
+backend = "cpca"
+x = "clusters"
+series = "storage_mb"
+)");
+  EXPECT_THROW(parse(bad3), InputError);
 }
 
 TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {

@@ -32,6 +32,15 @@ struct BackendInputs {
   bool btfs = false;  ///< the scene's BTFs, one per part
 };
 
+/// A number a paper publishes for a backend on one of its scenes at given parameters, printed
+/// beside ours by `prtlab compress` when the scene and those parameters match (docs/cli.md).
+struct PublishedNumber {
+  std::string scene;                          ///< prtlab's scene name ("chair")
+  std::map<std::string, std::string> params;  ///< the backend's parameters it was measured at
+  std::string text;                           ///< "12 terms per row: 37.1 MB"
+  std::string source;                         ///< "Sun et al. 2008, Fig. 6"
+};
+
 struct CompressorEntry {
   std::string name;
   std::string description;        ///< one line: the method and its paper
@@ -56,6 +65,8 @@ struct CompressorEntry {
   /// Bump whenever the backend's compressed output for the same input and parameters changes
   /// (algorithm or file layout): it is part of the stage-cache key of compressed results.
   std::uint32_t version = 1;
+  /// The papers' numbers for this backend (never part of any cache key).
+  std::vector<PublishedNumber> published;
 };
 
 class CompressorRegistry {
