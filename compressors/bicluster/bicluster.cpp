@@ -418,19 +418,11 @@ double BiclusterTransfer::flops_per_relight() const {
 }
 
 LightCoeffs BiclusterTransfer::project_light(const Cubemap& radiance) const {
-  if (radiance.layout.pixel_count() != a_.pixel_count) {
-    throw ParameterError(
-        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                    radiance.layout.pixel_count(), radiance.layout.resolution(), a_.pixel_count));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, static_cast<std::size_t>(a_.pixel_count), kName);
 }
 
 void BiclusterTransfer::prepare_output(LocalRadiance& out) const {
-  if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
 }
 
 // RGB + pad as one SSE register: float4 loads and adds, as the OpenCL kernels do. Float

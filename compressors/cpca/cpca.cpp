@@ -278,20 +278,12 @@ double CpcaTransfer::flops_per_relight() const {
 }
 
 LightCoeffs CpcaTransfer::project_light(const Cubemap& radiance) const {
-  if (radiance.layout.pixel_count() != a_.pixel_count) {
-    throw ParameterError(
-        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                    radiance.layout.pixel_count(), radiance.layout.resolution(), a_.pixel_count));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, static_cast<std::size_t>(a_.pixel_count), kName);
 }
 
 void CpcaTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   const std::vector<Rgb> q = representative_dots(a_, light.values);
   blend_rows(a_, q, out.values);
 }
@@ -301,10 +293,7 @@ void CpcaTransfer::relight_vertices(const LightCoeffs& light,
                                     LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
   check_vertex_subset(vertices, a_.vertices, kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   const std::vector<Rgb> q = representative_dots(a_, light.values);
   blend_vertex_rows(a_, q, vertices, out.values);
 }

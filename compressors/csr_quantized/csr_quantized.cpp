@@ -88,20 +88,12 @@ double CsrQuantizedTransfer::declared_error_bound() const {
 }
 
 LightCoeffs CsrQuantizedTransfer::project_light(const Cubemap& radiance) const {
-  if (radiance.layout.pixel_count() != q_.pixel_count) {
-    throw ParameterError(
-        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                    radiance.layout.pixel_count(), radiance.layout.resolution(), q_.pixel_count));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, static_cast<std::size_t>(q_.pixel_count), kName);
 }
 
 void CsrQuantizedTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(q_.pixel_count), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != q_.local_count ||
-      out.vertices != q_.vertices || out.values.size() != q_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, q_.local_count, q_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, q_.local_count, q_.vertices);
   relight_quantized(q_, light.values, out.values);
 }
 
@@ -110,10 +102,7 @@ void CsrQuantizedTransfer::relight_vertices(const LightCoeffs& light,
                                             LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(q_.pixel_count), kName);
   check_vertex_subset(vertices, q_.vertices, kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != q_.local_count ||
-      out.vertices != q_.vertices || out.values.size() != q_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, q_.local_count, q_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, q_.local_count, q_.vertices);
   relight_quantized_vertices(q_, light.values, vertices, out.values);
 }
 

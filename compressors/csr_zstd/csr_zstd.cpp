@@ -49,12 +49,7 @@ StorageReport CsrZstdTransfer::storage() const {
 }
 
 LightCoeffs CsrZstdTransfer::project_light(const Cubemap& radiance) const {
-  if (radiance.layout.pixel_count() != csr_->pixel_count) {
-    throw ParameterError(fmt::format(
-        "{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-        radiance.layout.pixel_count(), radiance.layout.resolution(), csr_->pixel_count));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, static_cast<std::size_t>(csr_->pixel_count), kName);
 }
 
 std::unique_ptr<DeviceRelighter> CsrZstdTransfer::upload(ClContext& context,

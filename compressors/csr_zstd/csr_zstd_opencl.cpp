@@ -106,10 +106,7 @@ class CsrZstdDevice final : public DeviceRelighter {
 
   double relight(const LightCoeffs& light, LocalRadiance& out) override {
     const double ms = relight_on_device(light);
-    if (out.basis != RadianceBasis::kPixel || out.dim != csr_->local_count ||
-        out.vertices != csr_->vertices || out.values.size() != rows_) {
-      out = LocalRadiance(RadianceBasis::kPixel, csr_->local_count, csr_->vertices);
-    }
+    out.ensure_shape(RadianceBasis::kPixel, csr_->local_count, csr_->vertices);
     download(ctx_, out_, std::span<Rgb>(out.values), "csr_zstd local radiance");
     return ms;
   }

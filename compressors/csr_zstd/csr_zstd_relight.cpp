@@ -72,10 +72,7 @@ std::vector<FrameTask> frame_tasks(const FramedCsr& csr, std::span<const std::ui
 void CsrZstdTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   const FramedCsr& csr = *csr_;
   check_pixel_light(light, static_cast<std::size_t>(csr.pixel_count), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != csr.local_count ||
-      out.vertices != csr.vertices || out.values.size() != csr.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, csr.local_count, csr.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, csr.local_count, csr.vertices);
   const std::vector<Float4> l4 = light4(light);
   const float scale = static_cast<float>(csr.scale());
   Rgb* result = out.values.data();
@@ -94,10 +91,7 @@ void CsrZstdTransfer::relight_vertices(const LightCoeffs& light,
   const FramedCsr& csr = *csr_;
   check_pixel_light(light, static_cast<std::size_t>(csr.pixel_count), kName);
   check_vertex_subset(vertices, csr.vertices, kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != csr.local_count ||
-      out.vertices != csr.vertices || out.values.size() != csr.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, csr.local_count, csr.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, csr.local_count, csr.vertices);
   const std::vector<FrameTask> tasks = frame_tasks(csr, vertices);
   const std::vector<Float4> l4 = light4(light);
   const float scale = static_cast<float>(csr.scale());

@@ -115,20 +115,12 @@ double HaarTransfer::flops_per_relight() const {
 }
 
 LightCoeffs HaarTransfer::project_light(const Cubemap& radiance) const {
-  if (radiance.layout.pixel_count() != a_.pixel_count) {
-    throw ParameterError(
-        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                    radiance.layout.pixel_count(), radiance.layout.resolution(), a_.pixel_count));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, static_cast<std::size_t>(a_.pixel_count), kName);
 }
 
 void HaarTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   relight_haar(a_, light.values, out.values);
 }
 
@@ -137,10 +129,7 @@ void HaarTransfer::relight_vertices(const LightCoeffs& light,
                                     LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
   check_vertex_subset(vertices, a_.vertices, kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != a_.local_count ||
-      out.vertices != a_.vertices || out.values.size() != a_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  }
+  out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   relight_haar_vertices(a_, light.values, vertices, out.values);
 }
 

@@ -85,20 +85,12 @@ StorageReport UncompressedTransfer::storage() const {
 }
 
 LightCoeffs UncompressedTransfer::project_light(const Cubemap& radiance) const {
-  if (static_cast<std::size_t>(radiance.layout.pixel_count()) != t_.cols()) {
-    throw ParameterError(
-        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}", kName,
-                    radiance.layout.pixel_count(), radiance.layout.resolution(), t_.cols()));
-  }
-  return {"pixel", radiance.light_vector()};
+  return pixel_light(radiance, t_.cols(), kName);
 }
 
 void UncompressedTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_pixel_light(light, t_.cols(), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() ||
-      out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
-  }
+  out.ensure_shape(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
   const std::uint32_t lit = lit_faces(light.values);
   if (lit == kAllFaces || faces_.empty()) {
     relight_exact(t_, light.values, out.values);
@@ -112,10 +104,7 @@ void UncompressedTransfer::relight_vertices(const LightCoeffs& light,
                                             LocalRadiance& out) const {
   check_pixel_light(light, t_.cols(), kName);
   check_vertex_subset(vertices, t_.vertex_count(), kName);
-  if (out.basis != RadianceBasis::kPixel || out.dim != t_.local_count() ||
-      out.vertices != t_.vertex_count() || out.values.size() != t_.rows()) {
-    out = LocalRadiance(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
-  }
+  out.ensure_shape(RadianceBasis::kPixel, t_.local_count(), t_.vertex_count());
   relight_culled(t_, faces_, light.values, lit_faces(light.values), false, vertices, out.values);
 }
 

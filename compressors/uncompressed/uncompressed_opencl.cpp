@@ -115,10 +115,7 @@ class UncompressedDevice final : public DeviceRelighter {
 
   double relight(const LightCoeffs& light, LocalRadiance& out) override {
     const double ms = relight_on_device(light);
-    if (out.basis != RadianceBasis::kPixel || out.dim != dim_ || out.vertices != vertices_ ||
-        out.values.size() != rows_) {
-      out = LocalRadiance(RadianceBasis::kPixel, dim_, vertices_);
-    }
+    out.ensure_shape(RadianceBasis::kPixel, dim_, vertices_);
     download(ctx_, out_, std::span<Rgb>(out.values), "uncompressed local radiance");
     return ms;
   }

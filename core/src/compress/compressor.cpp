@@ -23,6 +23,14 @@ void check_pixel_light(const LightCoeffs& light, std::size_t pixels, std::string
         pixels, light.basis, light.values.size()));
 }
 
+LightCoeffs pixel_light(const Cubemap& radiance, std::size_t pixels, std::string_view backend) {
+  if (static_cast<std::size_t>(radiance.layout.pixel_count()) != pixels)
+    throw ParameterError(
+        fmt::format("{}: the light cubemap has N = {} pixels (R = {}), the transfer N = {}",
+                    backend, radiance.layout.pixel_count(), radiance.layout.resolution(), pixels));
+  return {"pixel", radiance.light_vector()};
+}
+
 void check_vertex_subset(std::span<const std::uint32_t> vertices, std::size_t vertex_count,
                          std::string_view backend) {
   for (std::size_t i = 0; i < vertices.size(); ++i) {

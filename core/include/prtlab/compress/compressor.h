@@ -163,6 +163,10 @@ void check_transfer_shape(const TransferInput& input, std::string_view backend);
 /// values.
 void check_pixel_light(const LightCoeffs& light, std::size_t pixels, std::string_view backend);
 
+/// The pixel-basis light of `radiance` (its N values, the light of every backend whose light
+/// basis is the cubemap); ParameterError naming `backend` unless N = `pixels`.
+LightCoeffs pixel_light(const Cubemap& radiance, std::size_t pixels, std::string_view backend);
+
 /// Throws ParameterError naming `backend` unless `vertices` is sorted, unique and below
 /// `vertex_count` (what relight_vertices and set_vertex_subset accept).
 void check_vertex_subset(std::span<const std::uint32_t> vertices, std::size_t vertex_count,

@@ -24,6 +24,12 @@ struct LocalRadiance {
   LocalRadiance() = default;
   LocalRadiance(RadianceBasis b, int d, std::size_t v)
       : basis(b), dim(d), vertices(v), values(static_cast<std::size_t>(d) * v, Rgb(0.f)) {}
+  /// Makes this a zero-filled radiance of that shape unless it already has it; then its values
+  /// stay, so a relight of a vertex subset leaves the other vertices as they were.
+  void ensure_shape(RadianceBasis b, int d, std::size_t v) {
+    if (basis != b || dim != d || vertices != v || values.size() != static_cast<std::size_t>(d) * v)
+      *this = LocalRadiance(b, d, v);
+  }
   std::size_t rows() const { return values.size(); }
   std::span<const Rgb> vertex(std::size_t v) const {
     return std::span<const Rgb>(values).subspan(v * static_cast<std::size_t>(dim),
