@@ -51,7 +51,8 @@ class FullMaterial final : public CompressedMaterial {
 
 /// Every part's BTF in one device buffer (each distinct BTF once; a view-independent one with its
 /// view 0 only, U^2 x M x 3 floats) with per-part offsets and (U, view_side, view_independent)
-/// tables, evaluated by full_material.cl. The context must outlive the result.
+/// tables, evaluated by kernels/btf_table_material.cl (render/btf_table_material.h). The context
+/// must outlive the result.
 std::unique_ptr<DeviceMaterial> upload_full(ClContext& context,
                                             std::span<const FullMaterial* const> parts);
 

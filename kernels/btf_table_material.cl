@@ -1,33 +1,35 @@
-// Material `full` (compressors/full/README.md): the sampled BTF itself. b(u, e, .) is the
-// weighted sum of the BTF's (texel, view) vectors: 1 (nearest) or 4 (bilinear) texels x the 4
-// view samples around e (btf_view_samples), zero weights dropped. Implements the material
+// A material whose b(u, e, .) is a table of (texel, view) vectors (render/btf_table_material.h):
+// the sampled BTF itself (material `full`, pixel light bins) or a radiance transfer texture (SH
+// coefficients over the light direction). b(u, e, .) is the weighted sum of the table's
+// vectors: 1 (nearest) or 4 (bilinear) texels x the 4 view samples around e
+// (btf_view_samples), zero weights dropped. Implements the material
 // contract of compress/material_compressor.h; kernels/btf_lookup.cl comes before this file.
 //
-// Data (packed float RGB, no padding):
-//   full_btf          every distinct part BTF, rgb[((texel * V + view) * M + light) * 3 + c]
-//                     from the part's offset (floats); a view-independent BTF is stored with
-//                     V = 1 (view 0 only)
-//   full_part_offset  per part, the offset of its BTF in full_btf
-//   full_part_info    per part (U, view_side, view_independent, 0)
+// Data (packed float RGB, no padding; PRT_M values per vector):
+//   table_values       every distinct part table, rgb[((texel * V + view) * M + j) * 3 + c]
+//                      from the part's offset (floats); a view-independent table is stored with
+//                      V = 1 (view 0 only)
+//   table_part_offset  per part, the offset of its table in table_values
+//   table_part_info    per part (U, view_side, view_independent, 0)
 
 #define PRT_MATERIAL_PARAMS                                                         \
-  , __global const float *restrict full_btf, __global const ulong *restrict full_part_offset, \
-      __global const int4 *restrict full_part_info
-#define PRT_MATERIAL_ARGS , full_btf, full_part_offset, full_part_info
+  , __global const float *restrict table_values, __global const ulong *restrict table_part_offset, \
+      __global const int4 *restrict table_part_info
+#define PRT_MATERIAL_ARGS , table_values, table_part_offset, table_part_info
 
-#define FULL_PAIRS (PRT_TEXELS * 4)
+#define TABLE_PAIRS (PRT_TEXELS * 4)
 
 typedef struct {
-  ulong offsets[FULL_PAIRS];  // of the (texel, view) vectors, in floats
-  float weights[FULL_PAIRS];
+  ulong offsets[TABLE_PAIRS];  // of the (texel, view) vectors, in floats
+  float weights[TABLE_PAIRS];
   int n;
 } prt_material;
 
 // The (texel, view) vectors of a hit and their weights (Btf::texel_samples x btf_view_samples,
 // texel outer, view inner, zero weights dropped).
 void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
-  const ulong base = full_part_offset[part];
-  const int4 info = full_part_info[part];
+  const ulong base = table_part_offset[part];
+  const int4 info = table_part_info[part];
   const int res = info.x, side = info.y;
   int texels[4];
   float texel_w[4];
@@ -61,7 +63,7 @@ void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,
                         float4* b2 PRT_MATERIAL_PARAMS) {
   float4 s0 = (float4)(0.0f), s1 = (float4)(0.0f), s2 = (float4)(0.0f);
   for (int p = 0; p < m->n; ++p) {
-    __global const float* q = full_btf + m->offsets[p] + c;
+    __global const float* q = table_values + m->offsets[p] + c;
     const float w = m->weights[p];
     s0 += w * vload4(0, q);
     s1 += w * vload4(1, q);
@@ -74,6 +76,6 @@ void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,
 
 float prt_material_one(const prt_material* m, int c PRT_MATERIAL_PARAMS) {
   float s = 0.0f;
-  for (int p = 0; p < m->n; ++p) s += m->weights[p] * full_btf[m->offsets[p] + c];
+  for (int p = 0; p < m->n; ++p) s += m->weights[p] * table_values[m->offsets[p] + c];
   return s;
 }
