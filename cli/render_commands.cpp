@@ -184,6 +184,44 @@ std::string device_label(const Prepared& p) {
   return p.ctx ? p.ctx->info().label() : std::string("C++ reference (no OpenCL)");
 }
 
+// What the frame loop holds and computes besides the image: the transfer's storage and FLOPs
+// per relight, the parts' materials (each distinct one once) and their FLOPs per shaded pixel.
+struct FrameCosts {
+  std::uint64_t transfer_bytes = 0;
+  double transfer_flops = 0;
+  std::uint64_t material_bytes = 0;
+  double material_flops_per_pixel = 0;  ///< the largest over the parts
+};
+
+FrameCosts frame_costs(const Prepared& p) {
+  FrameCosts c;
+  c.transfer_bytes = p.compressed->storage().total_bytes();
+  c.transfer_flops = p.compressed->flops_per_relight();
+  std::vector<const CompressedMaterial*> seen;
+  for (const auto& m : p.materials.part_material) {
+    if (std::find(seen.begin(), seen.end(), m.get()) != seen.end()) continue;
+    seen.push_back(m.get());
+    c.material_bytes += m->storage().total_bytes();
+    c.material_flops_per_pixel = std::max(c.material_flops_per_pixel, m->flops_per_pixel());
+  }
+  return c;
+}
+
+nlohmann::json costs_json(const FrameCosts& c) {
+  return {{"transfer_bytes", c.transfer_bytes},
+          {"transfer_flops_per_relight", c.transfer_flops},
+          {"material_bytes", c.material_bytes},
+          {"material_flops_per_pixel", c.material_flops_per_pixel}};
+}
+
+std::string costs_text(const FrameCosts& c) {
+  return fmt::format(
+      "transfer {:.2f} MB, {:.2f} MFLOPs a relight; materials {:.2f} MB, {:.0f} FLOPs a shaded "
+      "pixel (per channel)",
+      c.transfer_bytes / 1e6, c.transfer_flops / 1e6, c.material_bytes / 1e6,
+      c.material_flops_per_pixel);
+}
+
 nlohmann::json stage_json(const FrameStageTimes& t) {
   return {{"gbuffer_ms", t.gbuffer_ms},
           {"gbuffer_upload_ms", t.gbuffer_upload_ms},
@@ -262,6 +300,7 @@ void run_render(const RenderCli& o) {
     j["exr"] = exr_written.empty() ? nlohmann::json(nullptr) : nlohmann::json(exr_written);
     j["png"] = png.string();
     j["stages"] = stage_json(stats.times);
+    j["costs"] = costs_json(frame_costs(p));
     j["setup_seconds"] = p.setup_seconds;
     j["transfer_cache_hit"] = p.transfer_cache_hit;
     j["compress_cache_hit"] = p.compress_cache_hit;
@@ -278,6 +317,7 @@ void run_render(const RenderCli& o) {
               image.height, hits, 100.0 * hits / std::max<std::size_t>(1, image.pixels.size()),
               o.filter.c_str());
   std::printf("device       %s\n", device_label(p).c_str());
+  std::printf("costs        %s\n", costs_text(frame_costs(p)).c_str());
   std::printf("setup        %.2f s (transfer %s, compression %s, %d of %zu BTFs from cache)\n",
               p.setup_seconds, p.transfer_cache_hit ? "cached" : "computed",
               p.compress_cache_hit ? "cached" : "computed", p.btf_cache_hits,
@@ -404,6 +444,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
   for (const auto& [k, v] : p.material_params)
     material_params += (material_params.empty() ? "" : ", ") + k + "=" + v;
   md += fmt::format("| material | `{}` ({}) |\n", o.material, material_params);
+  md += fmt::format("| storage and FLOPs | {} |\n", costs_text(frame_costs(p)));
   md += fmt::format(
       "| image | {} x {}, view `{}`, {} hit pixels ({:.1f} %) at the first camera, {} texels, "
       "view cache {} |\n",
@@ -517,6 +558,7 @@ void run_fps(const FpsCli& o) {
   j["parameters"] = p.params;
   j["material"] = o.material;
   j["material_parameters"] = p.material_params;
+  j["costs"] = costs_json(frame_costs(p));
   j["env"] = p.env_file.string();
   j["frames"] = n;
   j["width"] = p.camera.width;

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "prtlab/base/error.h"
+#include "prtlab/opencl/cl_id_list.h"
 #include "prtlab/opencl/cl_runtime.h"
 #include "sh_biscale/sh_biscale.h"
 
@@ -37,7 +38,6 @@ class ShBiscaleDevice final : public DeviceRelighter {
     light_ = make_buffer(ctx, n_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "sh_biscale light");
     out_ = make_buffer(ctx, std::max<std::size_t>(1, vertices_ * n_) * sizeof(Rgb),
                        CL_MEM_READ_WRITE, "sh_biscale local radiance");
-    subset_ = make_buffer(ctx, 0, CL_MEM_READ_ONLY, "sh_biscale vertex subset");
     set_args(rows_, static_cast<cl_uint>(vertices_ * n_), static_cast<cl_uint>(n_), matrices_,
              light_, out_);
     bytes_ = buffer_bytes({&matrices_, &light_, &out_});
@@ -47,22 +47,15 @@ class ShBiscaleDevice final : public DeviceRelighter {
 
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, vertices_, kName);
-    subset_count_ = vertices.size();
-    if (vertices.size_bytes() > subset_capacity_) {
-      subset_capacity_ = vertices.size_bytes();
-      subset_ = make_buffer(ctx_, subset_capacity_, CL_MEM_READ_ONLY, "sh_biscale vertex subset");
-    }
-    if (!vertices.empty())
-      write_buffer(ctx_, subset_, vertices.data(), vertices.size_bytes(),
-                   "sh_biscale vertex subset");
+    subset_.assign(ctx_, vertices);
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
     put_light(light);
-    const std::size_t items = subset_count_ * n_;
+    const std::size_t items = subset_.size() * n_;
     if (items == 0) return 0.0;
-    set_args(rows_vertices_, static_cast<cl_uint>(items), static_cast<cl_uint>(n_), subset_,
-             matrices_, light_, out_);
+    set_args(rows_vertices_, static_cast<cl_uint>(items), static_cast<cl_uint>(n_),
+             subset_.buffer(), matrices_, light_, out_);
     cl::Event event = launch(ctx_, "sh_biscale.rows_vertices", rows_vertices_,
                              LaunchRange::linear(items, kWorkGroup));
     return event_milliseconds(event, ctx_.info().device_name,
@@ -105,8 +98,7 @@ class ShBiscaleDevice final : public DeviceRelighter {
   cl::Kernel rows_, rows_vertices_;
   cl::Buffer matrices_, light_, out_;
   std::uint64_t bytes_ = 0;
-  cl::Buffer subset_;
-  std::size_t subset_count_ = 0, subset_capacity_ = 0;
+  DeviceIdList subset_{"sh_biscale vertex subset"};
 };
 
 }  // namespace
