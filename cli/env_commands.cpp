@@ -11,10 +11,12 @@
 #include <string>
 
 #include "commands.h"
-#include "prtlab/storage/data_paths.h"
-#include "prtlab/lighting/environment_map.h"
-#include "prtlab/image/image_io.h"
 #include "prtlab/base/log.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/lighting/srbf_light.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt::cli {
 namespace {
@@ -129,6 +131,98 @@ void run_cubemap(const CubemapOptions& o) {
   if (!o.preview.empty()) std::printf("wrote           %s (cross preview)\n", o.preview.c_str());
 }
 
+struct FitSrbfOptions {
+  std::string input;
+  int count = 162;
+  int resolution = 32;
+  int rounds = 40;
+  std::string seeding = "coverage";
+  std::string out;
+  std::string preview;
+  bool json = false;
+};
+
+nlohmann::json srbf_json(const SrbfLight& f) {
+  nlohmann::json list = nlohmann::json::array();
+  for (std::size_t j = 0; j < f.count(); ++j)
+    list.push_back({{"centre", rgb_json(f.centres[j])},
+                    {"bandwidth", f.bandwidths[j]},
+                    {"coefficient", rgb_json(f.coefficients[j])}});
+  return {{"kernel", std::string(to_string(f.kernel))},
+          {"scattered", f.scattered},
+          {"count", f.count()},
+          {"parameters", f.parameter_count()},
+          {"srbfs", std::move(list)}};
+}
+
+// Two cube-map crosses one above the other: the fit, then the light it approximates.
+RgbImage stacked_crosses(const Cubemap& top, const Cubemap& bottom) {
+  const RgbImage a = cubemap_cross_image(top), b = cubemap_cross_image(bottom);
+  RgbImage out(a.width, a.height + b.height);
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) out.at(x, y) = a.at(x, y);
+  for (int y = 0; y < b.height; ++y)
+    for (int x = 0; x < b.width; ++x) out.at(x, a.height + y) = b.at(x, y);
+  return out;
+}
+
+void run_fit_srbf(const FitSrbfOptions& o) {
+  const std::filesystem::path file = resolve_envmap(o.input);
+  const LatLongImage image = load_latlong_exr(file);
+  const Cubemap light = resample_to_cubemap(image, o.resolution);
+  ScatteredFitOptions so;
+  so.count = o.count;
+  so.rounds = o.rounds;
+  so.seeding = o.seeding == "coverage" ? SrbfSeeding::kCoverage : SrbfSeeding::kResidual;
+  so.on_round = [](int round, double e) {
+    log_info("fit-srbf: round {}: relative error {:.5f}", round, e);
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  ScatteredFitReport report;
+  const SrbfLight fit = fit_scattered_srbf(light, so, &report);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Uniform SRBFs with the same number of parameters: 3 per SRBF instead of 6.
+  const int uniform_count = static_cast<int>(fit.parameter_count() / 3);
+  const SrbfLight uniform = fit_uniform_srbf(light, uniform_count);
+  const double uniform_error = srbf_relative_error(uniform, light);
+  nlohmann::json j = {{"file", file.string()},
+                      {"resolution", o.resolution},
+                      {"seeding", o.seeding},
+                      {"rounds", report.rounds},
+                      {"lbfgs_line_search_failures", report.lbfgs_failures},
+                      {"seconds", seconds},
+                      {"initial_relative_error", report.initial_error},
+                      {"relative_error", report.error},
+                      {"uniform_count", uniform_count},
+                      {"uniform_bandwidth", uniform.bandwidths.front()},
+                      {"uniform_relative_error", uniform_error},
+                      {"fit", srbf_json(fit)},
+                      {"provenance", provenance()}};
+  if (!o.out.empty()) write_text_atomically(o.out, j.dump(2) + "\n");
+  if (!o.preview.empty())
+    write_png(stacked_crosses(fit.to_cubemap(o.resolution), light), o.preview);
+  if (o.json) {
+    j.erase("fit");
+    j["out"] = o.out.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.out);
+    j["preview"] = o.preview.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preview);
+    print_json(std::move(j));
+    return;
+  }
+  std::printf("input           %s, cubemap R = %d\n", file.string().c_str(), o.resolution);
+  std::printf(
+      "scattered       %d Gaussian SRBFs (%zu parameters), %s seeding, %d rounds in %.1f s\n",
+      o.count, fit.parameter_count(), o.seeding.c_str(), report.rounds, seconds);
+  std::printf("error           relative L2 %.5f (initial guess %.5f)\n", report.error,
+              report.initial_error);
+  std::printf(
+      "uniform         %d Gaussian SRBFs (%zu parameters, bandwidth %.1f): relative L2 %.5f\n",
+      uniform_count, uniform.parameter_count(), uniform.bandwidths.front(), uniform_error);
+  if (!o.out.empty()) std::printf("wrote           %s\n", o.out.c_str());
+  if (!o.preview.empty())
+    std::printf("wrote           %s (top: the fit, bottom: the light, cube-map crosses)\n",
+                o.preview.c_str());
+}
 }  // namespace
 
 void add_env_commands(CLI::App& app) {
@@ -162,6 +256,39 @@ void add_env_commands(CLI::App& app) {
                        "Also write a tone-mapped PNG of the faces as a cross (4R x 3R)");
   cube_cmd->add_flag("--json", cube->json, "Print one JSON object (keys in docs/cli.md)");
   cube_cmd->callback([cube] { run_cubemap(*cube); });
+
+  auto fit = std::make_shared<FitSrbfOptions>();
+  CLI::App* fit_cmd = env->add_subcommand(
+      "fit-srbf",
+      "Fit scattered Gaussian SRBFs to an environment (Tsai and Shih 2006, section 5.3) and "
+      "compare with uniform SRBFs of the same parameter count");
+  fit_cmd
+      ->add_option("exr", fit->input,
+                   "Lat-long EXR: a path, or a name from the data cache (e.g. courtyard)")
+      ->required();
+  fit_cmd->add_option("--count", fit->count, "Scattered SRBFs (6 parameters each)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
+  fit_cmd->add_option("--res", fit->resolution, "Cubemap face resolution R of the fit")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 128));
+  fit_cmd
+      ->add_option("--rounds", fit->rounds,
+                   "Alternating rounds (centres, bandwidths, coefficients) at most")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  fit_cmd
+      ->add_option("--seeding", fit->seeding,
+                   "Initial centres: coverage (the paper's) or residual (greedy)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"coverage", "residual"}));
+  fit_cmd->add_option(
+      "--out", fit->out,
+      "Write the fit (centres, bandwidths, RGB coefficients, errors, provenance) as JSON");
+  fit_cmd->add_option("--preview", fit->preview,
+                      "Write a PNG: the fit's cube-map cross above the light's");
+  fit_cmd->add_flag("--json", fit->json, "Print one JSON object (keys in docs/cli.md)");
+  fit_cmd->callback([fit] { run_fit_srbf(*fit); });
 }
 
 }  // namespace prt::cli

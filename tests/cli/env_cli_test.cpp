@@ -1,5 +1,5 @@
-// `prtlab env info` and `prtlab env cubemap` run as a user would: exit codes, output files,
-// the documented JSON keys, and errors that name the file.
+// `prtlab env info`, `prtlab env cubemap` and `prtlab env fit-srbf` run as a user would: exit
+// codes, output files, the documented JSON keys, and errors that name the file.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,8 +11,8 @@
 #include <sstream>
 #include <string>
 
-#include "prtlab/lighting/environment_map.h"
 #include "prtlab/image/image_io.h"
+#include "prtlab/lighting/environment_map.h"
 #include "support/cli_runner.h"
 
 namespace prt {
@@ -108,6 +108,33 @@ TEST_F(EnvCli, InfoJsonHasTheDocumentedKeys) {
   const RunResult text = run("env info \"" + exr_.string() + "\"");
   ASSERT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("128 x 64"), std::string::npos) << text.out;
+}
+
+TEST_F(EnvCli, FitSrbfWritesTheFitAndBeatsUniformSrbfs) {
+  const fs::path out = dir_ / "fit.json", png = dir_ / "fit.png";
+  const RunResult r =
+      run("-q env fit-srbf \"" + exr_.string() + "\" --count 8 --res 8 --rounds 10 --out \"" +
+          out.string() + "\" --preview \"" + png.string() + "\" --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key :
+       {"file", "resolution", "seeding", "rounds", "lbfgs_line_search_failures", "seconds",
+        "initial_relative_error", "relative_error", "uniform_count", "uniform_bandwidth",
+        "uniform_relative_error", "out", "preview", "provenance"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["uniform_count"], 16);
+  // The sun and sky: a small bright source the scattered SRBFs can sit on.
+  EXPECT_LT(j["relative_error"].get<double>(), j["uniform_relative_error"].get<double>());
+  EXPECT_LE(j["relative_error"].get<double>(), j["initial_relative_error"].get<double>());
+  ASSERT_TRUE(fs::exists(png));
+  const auto fit = nlohmann::json::parse(slurp_file(out));
+  ASSERT_EQ(fit["fit"]["srbfs"].size(), 8u);
+  EXPECT_EQ(fit["fit"]["parameters"], 48);
+  EXPECT_TRUE(fit["fit"]["srbfs"][0].contains("bandwidth"));
+  // A seeding that does not exist is an error naming the option.
+  const RunResult bad = run("env fit-srbf \"" + exr_.string() + "\" --seeding random");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("seeding"), std::string::npos) << bad.err;
 }
 
 TEST_F(EnvCli, MissingFileExitsOneNamingIt) {
