@@ -73,11 +73,9 @@ RttMaterial::RttMaterial(MaterialSampling sampling, std::shared_ptr<const Btf> t
   PRT_CHECK(
       table_->resolution() == sampling_.resolution && table_->view_side() == sampling_.view_side,
       "material rtt: the table's texels and views differ from the sampling's");
-  const int n = table_->light_count();
   cells_ = cell_integrals(sampling_.light_side, table_->light_side());
   const double omega = HemisphereGrid(sampling_.light_side).cell_solid_angle();
   for (double& v : cells_) v /= omega;
-  (void)n;
 }
 
 StorageReport RttMaterial::storage() const {

@@ -104,6 +104,13 @@ TEST(SrbfLight, BadInputsAreErrors) {
   o.count = 3;
   EXPECT_THROW(fit_scattered_srbf(light, o), ParameterError);
   EXPECT_THROW(fit_uniform_srbf(light, 12), ParameterError);
+  // A black light is fitted exactly by zero coefficients, not a division by zero.
+  Cubemap black(4);
+  o.count = 3;
+  ScatteredFitReport r;
+  const SrbfLight zero = fit_scattered_srbf(black, o, &r);
+  EXPECT_EQ(r.error, 0.0);
+  for (const auto& c : zero.coefficients) EXPECT_EQ(glm::length(c), 0.0);
   Cubemap ok(4);
   o.count = 0;
   EXPECT_THROW(fit_scattered_srbf(ok, o), ParameterError);

@@ -107,9 +107,7 @@ TEST(Srbf, AbelPoissonConvolutionIsFourPiTimesTheKernelOfTheProductBandwidth) {
           return srbf_eval(SrbfKernel::kAbelPoisson, glm::dot(eta, xg), lg) *
                  srbf_eval(SrbfKernel::kAbelPoisson, glm::dot(eta, xh), lh);
         };
-        // Both peaks resolved: integrate about each centre's pole, splitting the sphere at the
-        // plane halfway between them would be exact too; a fine rule about xg suffices here
-        // since the narrowest kernel (0.8) has width ~0.2 rad.
+        // A fine rule about xg resolves both kernels: the narrowest (0.8) is ~0.2 rad wide.
         const double numeric = sphere_integral(xg, product, 720, 1e-3);
         const double closed = srbf_convolution(SrbfKernel::kAbelPoisson, xg, lg, xh, lh);
         EXPECT_NEAR(closed / numeric, 1.0, 1e-6) << lg << " " << lh << " " << theta;

@@ -15,6 +15,7 @@
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/material_error.h"
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/frame_renderer.h"
@@ -148,6 +149,7 @@ TEST(Rtt, ErrorFallsWithTheOrderAndIsTheStoredOne) {
                        .create("rtt", {{"order", std::to_string(order)}})
                        ->compress({btf}, Progress::null());
     const double e = m->declared_error_bound();
+    EXPECT_NEAR(e, material_error(*m, *btf).relative_l2, 1e-12) << "order " << order;
     EXPECT_LE(e, previous + 1e-9) << "order " << order;
     previous = e;
   }

@@ -76,7 +76,7 @@ Matrix stored_matrix(const CompressedTransfer& ct, std::size_t v) {
   return m;
 }
 
-std::size_t centre_vertex(const TransferResult&) {
+std::size_t centre_vertex() {
   const Mesh plane = make_plane(2.0, 2.0, 2);
   for (std::size_t v = 0; v < plane.vertex_count(); ++v)
     if (glm::length(Vec3d(plane.positions[v])) < 1e-6) return v;
@@ -115,7 +115,7 @@ TEST(ShBiscale, UnoccludedVertexIsTheZeroHemisphereOperatorTimesTheRotation) {
   const int order = 5;
   const TransferResult r = plane_transfer(order, 2);
   const auto ct = compress(r, {{"order", "5"}});
-  const std::size_t v = centre_vertex(r);
+  const std::size_t v = centre_vertex();
   const LocalFrame frame = make_plane(2.0, 2.0, 2).frame(v);
   ASSERT_NEAR(frame.n.y, 1.0, 1e-9);
   const Matrix expected = hemisphere_gram(order) * rotation_by_projection(frame, order);
@@ -137,7 +137,7 @@ TEST(ShBiscale, LeastSquaresProjectionRecoversTheRotatedLightOfAnUnoccludedVerte
   const TransferResult r = plane_transfer(order, 4);
   const auto zero = compress(r, {{"order", "3"}, {"projection", "zero"}});
   const auto ls = compress(r, {{"order", "3"}, {"projection", "least_squares"}});
-  const std::size_t v = centre_vertex(r);
+  const std::size_t v = centre_vertex();
   const LocalFrame frame = make_plane(2.0, 2.0, 2).frame(v);
   const Matrix rot = rotation_by_projection(frame, order);
   const Matrix a = hemisphere_gram(order);

@@ -389,6 +389,12 @@ SrbfLight fit_scattered_srbf(const Cubemap& light, const ScatteredFitOptions& o,
   fit_srbf_coefficients(fit, light, o.ridge);
   const Samples s(light);
   ScatteredFitReport rep;
+  if (!(s.norm2 > 0)) {
+    // A black light: the zero coefficients are exact, and the optimiser's scaled objective
+    // would divide by zero.
+    if (report) *report = rep;
+    return fit;
+  }
   double error = srbf_relative_error(fit, light);
   rep.initial_error = error;
   for (int round = 1; round <= o.rounds; ++round) {

@@ -47,7 +47,8 @@ double srbf_legendre_coefficient(SrbfKernel kernel, int l, double lambda);
 
 /// The Gaussian bandwidth whose small-angle profile e^(-lambda theta^2 / 2) has standard deviation
 /// `sigma` radians: lambda = 1 / sigma^2 (1 - cos theta ~ theta^2 / 2). The paper's "variance
-/// pi/40" at 642 centres is read as sigma = pi/40, lambda = 162.1 (compressors/srbf_cta docs).
+/// pi/40" at 642 centres is read as sigma = pi/40, lambda = 162.1 (uniform_gaussian_bandwidth in
+/// lighting/srbf_light.h).
 double gaussian_bandwidth_for_sigma(double sigma);
 
 }  // namespace prt
