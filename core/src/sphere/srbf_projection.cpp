@@ -76,6 +76,13 @@ Eigen::VectorXd SrbfProjector::project(std::span<const double> pixel_values) con
   return solver_.solve(weights_.transpose() * f);
 }
 
+Eigen::MatrixXd SrbfProjector::solve(const Eigen::MatrixXd& b) const {
+  if (b.rows() != weights_.cols())
+    throw ParameterError(fmt::format("SrbfProjector: right-hand sides of {} values for {} SRBFs",
+                                     b.rows(), weights_.cols()));
+  return solver_.solve(b);
+}
+
 Eigen::VectorXd SrbfProjector::project_sparse(std::span<const std::uint32_t> pixels,
                                               std::span<const double> values) const {
   if (pixels.size() != values.size())

@@ -53,6 +53,9 @@ class SrbfProjector {
   /// c for a sparse f: the listed pixels with their values, every other pixel 0 (a row of T).
   Eigen::VectorXd project_sparse(std::span<const std::uint32_t> pixels,
                                  std::span<const double> values) const;
+  /// (A + alpha I)^-1 b for many right-hand sides at once (n x k), the coefficients of k
+  /// functions whose b vectors the caller accumulated (a block of T's rows).
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
   /// b's weights: G_j(d_k) Omega_k, pixel-major (N x n).
   const Eigen::MatrixXd& pixel_weights() const { return weights_; }
 

@@ -1,0 +1,477 @@
+#include "srbf_cta/clustered_tensor.h"
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <random>
+
+#include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
+#include "prtlab/numeric/elbg.h"
+#include "prtlab/numeric/row_set.h"
+#include "prtlab/numeric/truncated_pca.h"
+
+namespace prt::srbf_cta {
+namespace {
+
+using MatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using MapF = Eigen::Map<const MatF>;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct RightSingular {
+  Eigen::MatrixXd v;  ///< cols x k, orthonormal
+  Eigen::VectorXd sigma;
+};
+
+/// The top k right singular vectors of `a` from the Gram matrix of its smaller side: the shared
+/// truncated PCA (Gram path, uncentred) when the rows are fewer, else the eigenvectors of A^T A.
+/// Either way the k columns are orthonormal, completed beyond the rank of `a`.
+RightSingular top_right_singular(const RowMajorMatrixXd& a, Eigen::Index k) {
+  if (a.rows() <= a.cols()) {
+    TruncatedPcaOptions o;
+    o.components = static_cast<int>(k);
+    o.method = PcaMethod::kGram;
+    o.center = false;
+    TruncatedPca p = truncated_pca(RowSet::dense(a), o);
+    return {std::move(p.components), std::move(p.singular_values)};
+  }
+  const Eigen::MatrixXd g = a.transpose() * a;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
+  if (eig.info() != Eigen::Success)
+    throw Error("srbf_cta: the eigen-decomposition of a mode Gram matrix did not converge");
+  const Eigen::Index n = g.rows();
+  RightSingular r{Eigen::MatrixXd(n, k), Eigen::VectorXd(k)};
+  for (Eigen::Index j = 0; j < k; ++j) {
+    r.v.col(j) = eig.eigenvectors().col(n - 1 - j);
+    r.sigma[j] = std::sqrt(std::max(0.0, eig.eigenvalues()[n - 1 - j]));
+  }
+  return r;
+}
+
+class Cta {
+ public:
+  Cta(const TensorView& t, const CtaOptions& o) : t_(t), o_(o) {
+    m_.view = t.view;
+    m_.light = t.light;
+    const auto i1 = static_cast<int>(t.view), i2 = static_cast<int>(t.light);
+    r1_ = o.rank_view == 0 ? i1 : std::min(o.rank_view, i1);
+    r2_ = std::min(o.rank_light, i2);
+    r3_ = std::min(o.rank_vertex, r1_ * r2_);
+    m_.rank_view = r1_;
+    m_.rank_light = r2_;
+    m_.rank_vertex = r3_;
+    norms_.resize(t.vertices);
+    tbb::parallel_for(std::size_t{0}, t.vertices, [&](std::size_t x) {
+      norms_[x] = MapF(t.vertex(x), i1, i2).cast<double>().squaredNorm();
+    });
+    m_.total_squared_norm = std::accumulate(norms_.begin(), norms_.end(), 0.0);
+    m_.weights = RowMajorMatrixXd::Zero(static_cast<Eigen::Index>(t.vertices), r3_);
+  }
+
+  CtaModel run() {
+    auto t0 = Clock::now();
+    initialise();
+    m_.times.initialisation = seconds_since(t0);
+    t0 = Clock::now();
+    clustering();
+    m_.times.clustering = seconds_since(t0);
+    t0 = Clock::now();
+    approximation();
+    m_.times.approximation = seconds_since(t0);
+    m_.squared_error = total_error();
+    return std::move(m_);
+  }
+
+ private:
+  std::size_t zsize() const { return static_cast<std::size_t>(r1_) * t_.light; }
+  const float* z(std::size_t x) const { return z_.data() + x * zsize(); }
+  RowMajorMatrixXd zd(std::size_t x) const {
+    return MapF(z(x), r1_, static_cast<Eigen::Index>(t_.light)).cast<double>();
+  }
+
+  double total_error() const {
+    double e = 0;
+    for (const CtaCluster& c : m_.clusters) e += c.squared_error;
+    return e;
+  }
+
+  void view_basis(const Eigen::MatrixXd& gram) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
+    if (eig.info() != Eigen::Success)
+      throw Error("srbf_cta: the eigen-decomposition of the view Gram matrix did not converge");
+    const Eigen::Index n = gram.rows();
+    m_.view_basis.resize(n, r1_);
+    for (int j = 0; j < r1_; ++j) m_.view_basis.col(j) = eig.eigenvectors().col(n - 1 - j);
+  }
+
+  void project_view() {
+    const MatF ut = m_.view_basis.transpose().cast<float>();
+    const auto i1 = static_cast<Eigen::Index>(t_.view), i2 = static_cast<Eigen::Index>(t_.light);
+    z_.resize(t_.vertices * zsize());
+    tbb::parallel_for(std::size_t{0}, t_.vertices, [&](std::size_t x) {
+      Eigen::Map<MatF>(z_.data() + x * zsize(), r1_, i2).noalias() =
+          ut * MapF(t_.vertex(x), i1, i2);
+    });
+  }
+
+  void initialise() {
+    t0_ = Clock::now();
+    const auto i1 = static_cast<Eigen::Index>(t_.view), i2 = static_cast<Eigen::Index>(t_.light);
+    tbb::combinable<Eigen::MatrixXd> gram([&] { return Eigen::MatrixXd::Zero(i1, i1); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_.vertices, 16), [&](const auto& r) {
+      Eigen::MatrixXd& g = gram.local();
+      for (std::size_t x = r.begin(); x != r.end(); ++x) {
+        const MapF xm(t_.vertex(x), i1, i2);
+        g += (xm * xm.transpose()).cast<double>();
+      }
+    });
+    view_basis(gram.combine([](const auto& a, const auto& b) { return (a + b).eval(); }));
+    project_view();
+    log_debug("srbf_cta: view basis and Z in {:.2f} s", seconds_since(t0_));
+    ElbgOptions e;
+    e.clusters = static_cast<int>(std::min<std::size_t>(o_.clusters, t_.vertices));
+    e.seed = o_.seed;
+    e.rounds = o_.elbg_rounds;
+    const std::vector<float> points = elbg_points();
+    const ElbgResult q = elbg(points, t_.vertices, points.size() / t_.vertices, e);
+    log_debug("srbf_cta: ELBG ({} rounds, {} of {} shifts kept) at {:.2f} s", q.rounds,
+              q.shifts_accepted, q.shifts_tried, seconds_since(t0_));
+    m_.elbg_squared_error = q.squared_error;
+    m_.assignments = q.assignments;
+    m_.clusters.assign(static_cast<std::size_t>(e.clusters), {});
+    vertex_bases_.assign(m_.clusters.size(), {});
+    rebuild_members();
+    std::vector<char> all(m_.clusters.size(), 1);
+    refit(all, false);
+  }
+
+  /// The unfolded Z_x ELBG quantises: in full when they have at most `elbg_dims` values, else
+  /// their coordinates in the top elbg_dims principal directions of the Z_x (uncentred; the
+  /// randomised range finder of Halko et al. 2011 with one power step), where distances are
+  /// those of the full vectors less the part in the discarded, least energetic directions.
+  std::vector<float> elbg_points() const {
+    const auto v = static_cast<Eigen::Index>(t_.vertices), d = static_cast<Eigen::Index>(zsize());
+    const Eigen::Index k = std::min<Eigen::Index>({o_.elbg_dims, v, d});
+    if (o_.elbg_dims == 0 || k >= d) return z_;
+    const Eigen::Map<const MatF> zm(z_.data(), v, d);
+    std::mt19937_64 rng(o_.seed ^ 0x5bd1e995u);
+    std::normal_distribution<float> normal;
+    MatF omega(d, k);
+    for (Eigen::Index i = 0; i < omega.size(); ++i) omega.data()[i] = normal(rng);
+    auto orth = [](const MatF& y) -> MatF {
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(y.cast<double>());
+      return (qr.householderQ() * Eigen::MatrixXd::Identity(y.rows(), y.cols())).cast<float>();
+    };
+    MatF q = orth(zm * omega);
+    q = orth(zm * (zm.transpose() * q).eval());
+    const MatF b = q.transpose() * zm;  // k x d
+    const Eigen::MatrixXd g = (b * b.transpose()).cast<double>();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
+    // Coordinates Z V_k = Q U S: the principal axes' order does not matter to distances.
+    Eigen::MatrixXd us = eig.eigenvectors();
+    for (Eigen::Index j = 0; j < k; ++j)
+      us.col(j) *= std::sqrt(std::max(0.0, eig.eigenvalues()[j]));
+    const MatF coords = q * us.cast<float>();
+    return std::vector<float>(coords.data(), coords.data() + coords.size());
+  }
+
+  void rebuild_members() {
+    for (CtaCluster& c : m_.clusters) c.members.clear();
+    for (std::size_t x = 0; x < t_.vertices; ++x)
+      m_.clusters[m_.assignments[x]].members.push_back(static_cast<std::uint32_t>(x));
+  }
+
+  void refit(const std::vector<char>& which, bool warm) {
+    tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
+      if (which[c]) fit_cluster(m_.clusters[c], vertex_bases_[c], warm, true);
+    });
+    m_.refit_errors.push_back(total_error());
+  }
+
+  /// Modes 2 and 3 of the cluster's sub-tensor of Z with its members fixed (HOOI); the vertex
+  /// basis U_v (members x r) goes to `uv`, W_x to the model when `store_weights`.
+  void fit_cluster(CtaCluster& c, Eigen::MatrixXd& uv, bool warm, bool store_weights) {
+    const auto m = static_cast<Eigen::Index>(c.members.size());
+    const auto i2 = static_cast<Eigen::Index>(t_.light);
+    if (m == 0) {
+      c.dual.resize(0, static_cast<Eigen::Index>(r1_) * r2_);
+      if (c.light.size() == 0) c.light = Eigen::MatrixXd::Identity(i2, r2_);
+      uv.resize(0, 0);
+      c.squared_error = 0;
+      return;
+    }
+    if (!warm || c.light.rows() != i2) {
+      // HOSVD start: the mode-2 Gram of the members' Z_x, summed in float (a start only).
+      Eigen::MatrixXf g = Eigen::MatrixXf::Zero(i2, i2);
+      for (Eigen::Index k = 0; k < m; ++k) {
+        const MapF zx(z(c.members[k]), r1_, i2);
+        g.selfadjointView<Eigen::Lower>().rankUpdate(zx.transpose());
+      }
+      const Eigen::MatrixXd gd = g.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gd);
+      c.light = eig.eigenvectors().rightCols(r2_).rowwise().reverse();
+    }
+    vertex_step(c, uv, store_weights);
+    for (int s = 0; s < o_.hooi_sweeps; ++s) {
+      light_step(c, uv);
+      vertex_step(c, uv, store_weights);
+    }
+  }
+
+  void vertex_step(CtaCluster& c, Eigen::MatrixXd& uv, bool store_weights) {
+    const auto m = static_cast<Eigen::Index>(c.members.size());
+    const Eigen::Index w = static_cast<Eigen::Index>(r1_) * r2_;
+    RowMajorMatrixXd y(m, w);
+    const Eigen::MatrixXf lf = c.light.cast<float>();
+    const auto i2 = static_cast<Eigen::Index>(t_.light);
+    tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
+      const MatF p = MapF(z(c.members[k]), r1_, i2) * lf;  // R1 x R2
+      y.row(k) = Eigen::Map<const Eigen::RowVectorXf>(p.data(), w).cast<double>();
+    });
+    const Eigen::Index want = std::min<Eigen::Index>(r3_, m);
+    const RightSingular s = top_right_singular(y, want);
+    // Eq. 16 inverts the core's row Gram: only directions with a singular value survive it.
+    const double floor = (s.sigma.size() > 0 ? s.sigma[0] : 0.0) * 1e-9;
+    Eigen::Index r = 0;
+    while (r < want && s.sigma[r] > floor) ++r;
+    c.dual = s.v.leftCols(r).transpose();
+    const Eigen::MatrixXd weights = y * s.v.leftCols(r);  // m x r: W_x, rows
+    uv = weights;
+    for (Eigen::Index j = 0; j < r; ++j) uv.col(j) /= s.sigma[j];
+    double err = 0;
+    for (Eigen::Index k = 0; k < m; ++k) {
+      err += norms_[c.members[k]] - weights.row(k).squaredNorm();
+      if (store_weights) {
+        auto row = m_.weights.row(c.members[k]);
+        row.setZero();
+        row.head(r) = weights.row(k);
+      }
+    }
+    c.squared_error = std::max(0.0, err);
+  }
+
+  void light_step(CtaCluster& c, const Eigen::MatrixXd& uv) {
+    const auto m = static_cast<Eigen::Index>(c.members.size());
+    const auto i2 = static_cast<Eigen::Index>(t_.light);
+    const Eigen::Index r = uv.cols();
+    if (r == 0) return;
+    // Mode 2 of Z_c x_3 U_v^T: rows (j, a) of Q_j = sum_x U_v(x, j) Z_x.
+    RowMajorMatrixXd a = RowMajorMatrixXd::Zero(r * r1_, i2);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const RowMajorMatrixXd zx = zd(c.members[k]);
+      for (Eigen::Index j = 0; j < r; ++j) a.middleRows(j * r1_, r1_) += uv(k, j) * zx;
+    }
+    c.light = top_right_singular(a, r2_).v;
+  }
+
+  /// Returns the vertices moved and the total error they shed (in double, with these bases).
+  std::pair<std::size_t, double> reclassify() {
+    const Eigen::Index zs = static_cast<Eigen::Index>(zsize());
+    // B_c's rows refold(V_cj) U_c^T (R1 x I2), so that W_xc = B_c vec(Z_x): one product for
+    // every vertex and cluster.
+    std::vector<Eigen::Index> first{0};
+    for (const CtaCluster& c : m_.clusters) first.push_back(first.back() + c.dual.rows());
+    MatF b(first.back(), zs);
+    for (std::size_t c = 0; c < m_.clusters.size(); ++c) {
+      const CtaCluster& cl = m_.clusters[c];
+      for (Eigen::Index j = 0; j < cl.dual.rows(); ++j) {
+        const Eigen::Map<const RowMajorMatrixXd> vj(cl.dual.row(j).data(), r1_, r2_);
+        const RowMajorMatrixXd bj = vj * cl.light.transpose();
+        b.row(first[c] + j) = Eigen::Map<const Eigen::RowVectorXd>(bj.data(), zs).cast<float>();
+      }
+    }
+    const Eigen::Map<const MatF> zall(z_.data(), static_cast<Eigen::Index>(t_.vertices), zs);
+    std::vector<std::uint32_t> next = m_.assignments;
+    std::vector<double> gain(t_.vertices, 0.0);
+    constexpr Eigen::Index kBlock = 256;
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, static_cast<Eigen::Index>(t_.vertices), kBlock),
+        [&](const auto& r) {
+          const MatF w = zall.middleRows(r.begin(), r.end() - r.begin()) * b.transpose();
+          for (Eigen::Index x = r.begin(); x < r.end(); ++x) {
+            const auto row = w.row(x - r.begin());
+            const std::uint32_t cur = m_.assignments[static_cast<std::size_t>(x)];
+            std::uint32_t best = cur;
+            double best_kept = -1;
+            for (std::size_t c = 0; c < m_.clusters.size(); ++c) {
+              const double kept = row.segment(first[c], first[c + 1] - first[c])
+                                      .template cast<double>()
+                                      .squaredNorm();
+              if (kept > best_kept) best_kept = kept, best = static_cast<std::uint32_t>(c);
+            }
+            if (best == cur) continue;
+            // The float products choose the candidate; the move is decided in double.
+            const auto xs = static_cast<std::size_t>(x);
+            const double e_cur = error_in(xs, cur), e_new = error_in(xs, best);
+            if (e_new < e_cur) {
+              next[xs] = best;
+              gain[xs] = e_cur - e_new;
+            }
+          }
+        });
+    std::size_t moved = 0;
+    for (std::size_t x = 0; x < t_.vertices; ++x) moved += next[x] != m_.assignments[x];
+    m_.assignments = std::move(next);
+    rebuild_members();
+    const double shed = std::accumulate(gain.begin(), gain.end(), 0.0) + reseed_empty();
+    return {moved, shed};
+  }
+
+  double error_in(std::size_t x, std::size_t c) const {
+    const CtaCluster& cl = m_.clusters[c];
+    const RowMajorMatrixXd p = zd(x) * cl.light;
+    const Eigen::Map<const Eigen::VectorXd> y(p.data(), p.size());
+    return norms_[x] - (cl.dual * y).squaredNorm();
+  }
+
+  /// An emptied cluster takes the vertex it approximates best on its own, when that lowers the
+  /// vertex's error (candidates: the worst-approximated vertices of clusters with others left).
+  double reseed_empty() {
+    double shed = 0;
+    for (std::size_t c = 0; c < m_.clusters.size(); ++c) {
+      if (!m_.clusters[c].members.empty()) continue;
+      std::vector<std::pair<double, std::uint32_t>> worst;
+      for (std::size_t x = 0; x < t_.vertices; ++x)
+        if (m_.clusters[m_.assignments[x]].members.size() > 1)
+          worst.emplace_back(error_in(x, m_.assignments[x]), static_cast<std::uint32_t>(x));
+      const std::size_t take = std::min<std::size_t>(8, worst.size());
+      std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(take),
+                        worst.end(), std::greater<>());
+      for (std::size_t k = 0; k < take; ++k) {
+        CtaCluster trial;
+        trial.members = {worst[k].second};
+        Eigen::MatrixXd uv;
+        fit_cluster(trial, uv, false, false);
+        if (trial.squared_error < worst[k].first) {
+          shed += worst[k].first - trial.squared_error;
+          m_.assignments[worst[k].second] = static_cast<std::uint32_t>(c);
+          m_.clusters[c].light = trial.light;
+          break;
+        }
+      }
+      rebuild_members();
+    }
+    return shed;
+  }
+
+  void clustering() {
+    for (int it = 0; it < o_.clustering_iterations; ++it) {
+      const double before = total_error();
+      const std::vector<std::uint32_t> old = m_.assignments;
+      const auto [moved, shed] = reclassify();
+      // The total with the bases that classified, at the new membership.
+      m_.reclassification_errors.push_back(before);
+      m_.reclassification_errors.push_back(before - shed);
+      m_.clustering_iterations = it + 1;
+      if (moved == 0) {
+        report("clustering", it, before, 0);
+        break;
+      }
+      std::vector<char> changed(m_.clusters.size(), 0);
+      for (std::size_t x = 0; x < t_.vertices; ++x)
+        if (old[x] != m_.assignments[x]) changed[old[x]] = changed[m_.assignments[x]] = 1;
+      for (std::size_t c = 0; c < m_.clusters.size(); ++c)
+        if (m_.clusters[c].members.empty()) changed[c] = 1;
+      refit(changed, true);
+      report("clustering", it, total_error(), moved);
+    }
+  }
+
+  void approximation() {
+    if (r1_ == static_cast<int>(t_.view)) return;  // U is a rotation: nothing to improve
+    const auto i1 = static_cast<Eigen::Index>(t_.view), i2 = static_cast<Eigen::Index>(t_.light);
+    double previous = total_error();
+    for (int it = 0; it < o_.approximation_iterations; ++it) {
+      // Mode 1 of every cluster's X_c x_2 U_c^T x_3 U_v,c^T.
+      tbb::combinable<Eigen::MatrixXd> gram([&] { return Eigen::MatrixXd::Zero(i1, i1); });
+      tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
+        const CtaCluster& cl = m_.clusters[c];
+        const Eigen::MatrixXd& uv = vertex_bases_[c];
+        if (cl.members.empty() || uv.cols() == 0) return;
+        std::vector<RowMajorMatrixXd> q(static_cast<std::size_t>(uv.cols()),
+                                        RowMajorMatrixXd::Zero(i1, r2_));
+        for (std::size_t k = 0; k < cl.members.size(); ++k) {
+          const RowMajorMatrixXd p =
+              MapF(t_.vertex(cl.members[k]), i1, i2).cast<double>() * cl.light;
+          for (Eigen::Index j = 0; j < uv.cols(); ++j)
+            q[static_cast<std::size_t>(j)] += uv(static_cast<Eigen::Index>(k), j) * p;
+        }
+        Eigen::MatrixXd& g = gram.local();
+        for (const RowMajorMatrixXd& qj : q) g += qj * qj.transpose();
+      });
+      view_basis(gram.combine([](const auto& a, const auto& b) { return (a + b).eval(); }));
+      project_view();
+      std::vector<char> all(m_.clusters.size(), 1);
+      refit(all, true);
+      const double now = total_error();
+      m_.approximation_iterations = it + 1;
+      report("approximation", it, now, 0);
+      if (!(previous > 0) || previous - now <= o_.tolerance * previous) break;
+      previous = now;
+    }
+  }
+
+  void report(const char* phase, int it, double err, std::size_t moved) const {
+    if (o_.on_pass) o_.on_pass(CtaPass{phase, it, err, moved});
+  }
+
+  const TensorView& t_;
+  const CtaOptions& o_;
+  Clock::time_point t0_;
+  int r1_ = 0, r2_ = 0, r3_ = 0;
+  std::vector<double> norms_;
+  std::vector<float> z_;
+  std::vector<Eigen::MatrixXd> vertex_bases_;
+  CtaModel m_;
+};
+
+}  // namespace
+
+CtaModel clustered_tensor_approximation(const TensorView& t, const CtaOptions& o) {
+  if (t.vertices == 0 || t.view == 0 || t.light == 0)
+    throw ParameterError(
+        fmt::format("srbf_cta: a tensor of {} x {} x {} has nothing to approximate", t.view,
+                    t.light, t.vertices));
+  if (t.values.size() != t.vertices * t.view * t.light)
+    throw ParameterError(fmt::format("srbf_cta: {} values for a {} x {} x {} tensor",
+                                     t.values.size(), t.view, t.light, t.vertices));
+  if (o.clusters < 1 || o.rank_view < 0 || o.rank_light < 1 || o.rank_vertex < 1)
+    throw ParameterError(fmt::format(
+        "srbf_cta: clusters {} and ranks ({}, {}, {}) must be at least 1 (rank_view 0: all)",
+        o.clusters, o.rank_view, o.rank_light, o.rank_vertex));
+  if (!std::all_of(t.values.begin(), t.values.end(), [](float v) { return std::isfinite(v); }))
+    throw ParameterError("srbf_cta: the tensor has a value that is not finite");
+  return Cta(t, o).run();
+}
+
+RowMajorMatrixXd reconstruct_vertex(const CtaModel& m, std::size_t x) {
+  const CtaCluster& c = m.clusters[m.assignments[x]];
+  const Eigen::Index r = c.dual.rows();
+  const Eigen::RowVectorXd y = m.weights.row(static_cast<Eigen::Index>(x)).head(r) * c.dual;
+  const Eigen::Map<const RowMajorMatrixXd> k(y.data(), m.rank_view, m.rank_light);
+  return m.view_basis * k * c.light.transpose();
+}
+
+double vertex_cluster_error(const TensorView& t, const CtaModel& m, std::size_t x, std::size_t c) {
+  const auto i1 = static_cast<Eigen::Index>(t.view), i2 = static_cast<Eigen::Index>(t.light);
+  const RowMajorMatrixXd xm = MapF(t.vertex(x), i1, i2).cast<double>();
+  const CtaCluster& cl = m.clusters[c];
+  const RowMajorMatrixXd p = m.view_basis.transpose() * xm * cl.light;
+  const Eigen::Map<const Eigen::VectorXd> y(p.data(), p.size());
+  const Eigen::RowVectorXd back = (cl.dual * y).transpose() * cl.dual;
+  const Eigen::Map<const RowMajorMatrixXd> k(back.data(), m.rank_view, m.rank_light);
+  return (xm - m.view_basis * k * cl.light.transpose()).squaredNorm();
+}
+
+}  // namespace prt::srbf_cta
