@@ -14,6 +14,7 @@
 #include "prtlab/sphere/hemisphere_projection.h"
 #include "prtlab/sphere/spherical_harmonics.h"
 #include "prtlab/storage/archive.h"
+#include "prtlab/storage/index_section.h"
 #include "prtlab/transfer/sh_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
@@ -181,8 +182,7 @@ std::string_view to_string(CpcaMethod m) {
 }
 
 std::size_t CpcaShArrays::id_bytes() const {
-  const std::size_t c = clusters();
-  return c <= 256 ? 1 : (c <= 65536 ? 2 : 4);
+  return index_bytes(clusters());
 }
 
 int CpcaShArrays::uniform_vectors() const {
@@ -452,17 +452,7 @@ void CpcaShTransfer::save(ArchiveWriter& archive) const {
   for (std::size_t c = 0; c < a_.clusters(); ++c)
     counts[c] = static_cast<std::uint16_t>(a_.vectors_of(c));
   archive.add_section("vector_counts", std::move(counts));
-  switch (a_.id_bytes()) {
-    case 1:
-      archive.add_section("cluster_ids", std::vector<std::uint8_t>(a_.ids.begin(), a_.ids.end()));
-      break;
-    case 2:
-      archive.add_section("cluster_ids", std::vector<std::uint16_t>(a_.ids.begin(), a_.ids.end()));
-      break;
-    default:
-      archive.add_section("cluster_ids", a_.ids);
-      break;
-  }
+  add_index_section(archive, "cluster_ids", a_.ids, a_.clusters());
   switch (a_.format) {
     case WeightFormat::kFloat32:
       archive.add_section("weights", a_.weights32);
@@ -521,19 +511,7 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
     if (reps > kU32) throw fail("the representative count overflows u32");
     a.first[c + 1] = static_cast<std::uint32_t>(reps);
   }
-  const std::size_t id_bytes = clusters <= 256 ? 1 : (clusters <= 65536 ? 2 : 4);
-  if (id_bytes == 1) {
-    const auto v = r.view<std::uint8_t>("cluster_ids", a.vertices);
-    a.ids.assign(v.begin(), v.end());
-  } else if (id_bytes == 2) {
-    const auto v = r.view<std::uint16_t>("cluster_ids", a.vertices);
-    a.ids.assign(v.begin(), v.end());
-  } else {
-    a.ids = r.section<std::uint32_t>("cluster_ids", a.vertices);
-  }
-  // The kernels trust these arrays: a consistent checksum does not make them in range.
-  if (std::any_of(a.ids.begin(), a.ids.end(), [&](std::uint32_t id) { return id >= clusters; }))
-    throw fail(fmt::format("a cluster id is out of range ({} clusters)", clusters));
+  a.ids = read_index_section(r, "cluster_ids", a.vertices, clusters);
   std::uint64_t weights = 0;
   for (std::uint32_t id : a.ids) weights += counts[id];
   switch (a.format) {

@@ -396,7 +396,7 @@ CompressorEntry registry_entry() {
        {},
        "alternating L-BFGS-B rounds of the scattered fit"},
   };
-  e.size_knob = SizeKnob{"rank_vertex", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 64.0,
+  e.size_knob = SizeKnob{"rank_vertex", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 128.0,
                          SizeKnob::Scale::kLinear};
   e.lossless = false;
   e.create = [](const ParamSet& ps) -> std::unique_ptr<Compressor> {

@@ -10,6 +10,7 @@
 #include "prtlab/lighting/srbf_light.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/storage/archive.h"
+#include "prtlab/storage/index_section.h"
 #include "srbf_cta/srbf_cta.h"
 
 namespace prt::srbf_cta {
@@ -64,8 +65,7 @@ std::string_view to_string(LightMode m) {
 }
 
 std::size_t SrbfCtaArrays::id_bytes() const {
-  const std::size_t c = clusters();
-  return c <= 256 ? 1 : (c <= 65536 ? 2 : 4);
+  return index_bytes(clusters());
 }
 
 SrbfCtaTransfer::SrbfCtaTransfer(SrbfCtaArrays arrays,
@@ -248,17 +248,7 @@ void SrbfCtaTransfer::save(ArchiveWriter& w) const {
   add_values(w, "light_bases", a_.light_bases, a_.precision);
   add_values(w, "dual_bases", a_.duals, a_.precision);
   add_values(w, "weights", a_.weights, a_.precision);
-  switch (a_.id_bytes()) {
-    case 1:
-      w.add_section("cluster_ids", std::vector<std::uint8_t>(a_.ids.begin(), a_.ids.end()));
-      break;
-    case 2:
-      w.add_section("cluster_ids", std::vector<std::uint16_t>(a_.ids.begin(), a_.ids.end()));
-      break;
-    default:
-      w.add_section("cluster_ids", a_.ids);
-      break;
-  }
+  add_index_section(w, "cluster_ids", a_.ids, a_.clusters());
 }
 
 std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r) {
@@ -320,18 +310,7 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   a.light_bases = read_values(r, "light_bases", clusters * nt * r2, a.precision);
   a.duals = read_values(r, "dual_bases", clusters * r3 * r1 * r2, a.precision);
   a.weights = read_values(r, "weights", a.vertices * r3, a.precision);
-  const std::size_t id_bytes = clusters <= 256 ? 1 : (clusters <= 65536 ? 2 : 4);
-  if (id_bytes == 1) {
-    const auto v = r.view<std::uint8_t>("cluster_ids", a.vertices);
-    a.ids.assign(v.begin(), v.end());
-  } else if (id_bytes == 2) {
-    const auto v = r.view<std::uint16_t>("cluster_ids", a.vertices);
-    a.ids.assign(v.begin(), v.end());
-  } else {
-    a.ids = r.section<std::uint32_t>("cluster_ids", a.vertices);
-  }
-  if (std::any_of(a.ids.begin(), a.ids.end(), [&](std::uint32_t id) { return id >= clusters; }))
-    throw fail(fmt::format("a cluster id is out of range ({} clusters)", clusters));
+  a.ids = read_index_section(r, "cluster_ids", a.vertices, clusters);
   const auto finite = [](float v) { return std::isfinite(v); };
   for (const auto* v : {&a.view_basis, &a.light_bases, &a.duals, &a.weights})
     if (!std::all_of(v->begin(), v->end(), finite)) throw fail("a stored value is not finite");

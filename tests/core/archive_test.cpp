@@ -19,6 +19,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/storage/content_hash.h"
+#include "prtlab/storage/index_section.h"
 #include "support/temp_dir.h"
 
 namespace prt {
@@ -617,6 +618,34 @@ TEST(ArchiveWriter, RefusesBadNamesAndDuplicates) {
 
 TEST(ArchiveWriter, EqualInputsGiveEqualFiles) {
   EXPECT_EQ(Sample().writer().to_bytes(), Sample().writer().to_bytes());
+}
+
+TEST(IndexSection, NarrowestTypeRoundTripAndRangeCheck) {
+  TempDir dir;
+  EXPECT_EQ(index_bytes(1), 1u);
+  EXPECT_EQ(index_bytes(256), 1u);
+  EXPECT_EQ(index_bytes(257), 2u);
+  EXPECT_EQ(index_bytes(65536), 2u);
+  EXPECT_EQ(index_bytes(65537), 4u);
+  for (std::uint64_t count : {std::uint64_t{3}, std::uint64_t{300}, std::uint64_t{70000}}) {
+    const std::vector<std::uint32_t> ids = {0, static_cast<std::uint32_t>(count - 1), 1, 2};
+    ArchiveWriter w("ids", 1);
+    add_index_section(w, "ids", ids, count);
+    // The same ids declared with a smaller count: the last valid one is out of range.
+    add_index_section(w, "wide", ids, count);
+    const fs::path file = dir / ("ids" + std::to_string(count) + ".prt");
+    w.write(file);
+    const ArchiveReader r = ArchiveReader::open(file, "ids", 1);
+    EXPECT_EQ(read_index_section(r, "ids", 4, count), ids) << count;
+    EXPECT_EQ(fs::file_size(file) > 0, true);
+    const std::string err = error_of([&] { (void)read_index_section(r, "wide", 4, count - 1); });
+    if (index_bytes(count - 1) == index_bytes(count)) {
+      EXPECT_THAT(err, ::testing::HasSubstr("out of range")) << count;
+      EXPECT_THAT(err, ::testing::HasSubstr(file.string())) << count;
+    }
+    EXPECT_THAT(error_of([&] { (void)read_index_section(r, "ids", 5, count); }),
+                ::testing::Not(::testing::HasSubstr("no exception")));
+  }
 }
 
 }  // namespace
