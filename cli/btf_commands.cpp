@@ -1,4 +1,5 @@
-// `prtlab btf list|generate|info|preview`: the BTFs prtlab generates from meso-structures
+// `prtlab btf list|generate|info|preview|import|export`: the BTFs prtlab generates from
+// meso-structures, and measured ones brought in from and out to the UTIA and Bonn layouts
 // (docs/btf.md). Documented in docs/cli.md (every option and JSON key).
 #include <algorithm>
 #include <chrono>
@@ -10,12 +11,15 @@
 #include <vector>
 
 #include "commands.h"
+#include "prtlab/base/error.h"
 #include "prtlab/btf/btf.h"
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
-#include "prtlab/base/error.h"
-#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/btf/measured_btf.h"
+#include "prtlab/btf/ubo_btf.h"
+#include "prtlab/btf/utia_btf.h"
 #include "prtlab/image/image_io.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 
 namespace prt::cli {
 namespace {
@@ -305,11 +309,118 @@ void run_preview(const PreviewCli& o) {
       o.out.c_str(), img.width, img.height);
 }
 
+// --- import / export ------------------------------------------------------------------------
+
+struct ImportCli {
+  std::string input;
+  std::string format;
+  MeasuredImportOptions options;
+  std::string cosine = "cell-mean";
+  std::string out;
+  bool json = false;
+};
+
+void run_import(const ImportCli& o) {
+  MeasuredImportOptions opt = o.options;
+  opt.cosine = parse_light_cosine(o.cosine);
+  const auto t0 = std::chrono::steady_clock::now();
+  MeasuredBtf m;
+  if (o.format == "utia")
+    m = read_utia_btf(o.input, opt);
+  else if (o.format == "ubo")
+    m = read_ubo_btf(o.input, opt);
+  else
+    throw ParameterError(fmt::format("unknown import format '{}' (valid: utia, ubo)", o.format));
+  write_btf(m.btf, o.out);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const MeasuredCoverage& c = m.coverage;
+  const BtfStats s = btf_stats(m.btf);
+  if (o.json) {
+    nlohmann::json j = stats_json(m.btf, s);
+    j["format"] = o.format;
+    j["input"] = o.input;
+    j["out"] = o.out;
+    j["coverage"] = c.to_json();
+    j["seconds"] = seconds;
+    print_json(std::move(j));
+    return;
+  }
+  print_stats(m.btf, s);
+  std::printf("measured        %d x %d texels x %d views x %d lights (box filter %d x %d)\n",
+              c.measured_resolution, c.measured_resolution, c.measured_views, c.measured_lights,
+              c.box_factor, c.box_factor);
+  std::printf("views used      %d of %d measured; nearest %.2f deg mean, %.2f deg max\n",
+              c.views_used, c.measured_views, c.mean_view_angle_deg, c.max_view_angle_deg);
+  std::printf("lights used     %d of %d measured; nearest %.2f deg mean, %.2f deg max\n",
+              c.lights_used, c.measured_lights, c.mean_light_angle_deg, c.max_light_angle_deg);
+  std::printf("wrote           %s (%.2f s)\n", o.out.c_str(), seconds);
+}
+
+struct ExportCli {
+  std::string input;
+  GenerateOptions gen;
+  std::string format;
+  std::string cosine = "cell-mean";
+  bool png = false;
+  double png_scale = 1.0;
+  int components = 0;
+  int scalar_bytes = 4;
+  std::string out;
+  bool json = false;
+};
+
+void run_export(const ExportCli& o) {
+  const LightCosine cosine = parse_light_cosine(o.cosine);
+  const Loaded l = load_or_generate(o.input, o.gen);
+  nlohmann::json j = {{"material", l.btf.material()},
+                      {"source", l.source},
+                      {"format", o.format},
+                      {"out", o.out},
+                      {"light_cosine", o.cosine}};
+  if (o.format == "utia") {
+    UtiaWriteOptions w;
+    w.format = o.png ? UtiaImageFormat::kPng16 : UtiaImageFormat::kExr;
+    w.png_scale = o.png_scale;
+    w.cosine = cosine;
+    const UtiaWriteReport r = write_utia_btf(l.btf, o.out, w);
+    j["images"] = r.images;
+    j["clipped"] = r.clipped;
+  } else if (o.format == "ubo-fmf" || o.format == "ubo-bdi") {
+    UboWriteOptions w;
+    w.components = o.components;
+    w.scalar_bytes = o.scalar_bytes;
+    w.cosine = cosine;
+    if (o.format == "ubo-fmf")
+      write_ubo_fmf(l.btf, o.out, w);
+    else
+      write_ubo_bdi(l.btf, o.out, w);
+    j["bytes"] = std::filesystem::file_size(o.out);
+  } else {
+    throw ParameterError(
+        fmt::format("unknown export format '{}' (valid: utia, ubo-fmf, ubo-bdi)", o.format));
+  }
+  if (o.json) {
+    print_json(std::move(j));
+    return;
+  }
+  std::printf("wrote %s (%s", o.out.c_str(), o.format.c_str());
+  if (j.contains("images")) {
+    std::printf(", %d images", j["images"].get<int>());
+    if (j["clipped"].get<std::size_t>() > 0)
+      std::printf(", %zu PNG samples clipped: raise --png-scale", j["clipped"].get<std::size_t>());
+  } else {
+    std::printf(", %zu bytes", j["bytes"].get<std::size_t>());
+  }
+  std::printf(") from %s (%s)\n", l.btf.material().c_str(), l.source.c_str());
+}
+
 }  // namespace
 
 void add_btf_commands(CLI::App& app) {
-  CLI::App* btf =
-      app.add_subcommand("btf", "BTFs generated from meso-structures: list, generate, inspect");
+  CLI::App* btf = app.add_subcommand(
+      "btf",
+      "BTFs generated from meso-structures or measured: list, generate, inspect, import, export");
   btf->require_subcommand(1);
 
   auto list_json = std::make_shared<bool>(false);
@@ -350,6 +461,68 @@ void add_btf_commands(CLI::App& app) {
       ->capture_default_str();
   prev_cmd->add_flag("--json", prev->json, "Print one JSON object (keys in docs/cli.md)");
   prev_cmd->callback([prev] { run_preview(*prev); });
+
+  auto imp = std::make_shared<ImportCli>();
+  CLI::App* imp_cmd = btf->add_subcommand(
+      "import", "Resample a measured BTF (UTIA image directory, Bonn UBO file) into a BTF archive");
+  imp_cmd->add_option("path", imp->input, "UTIA directory or UBO .btf file")->required();
+  imp_cmd->add_option("--format", imp->format, "utia or ubo")
+      ->required()
+      ->check(CLI::IsMember({"utia", "ubo"}));
+  imp_cmd->add_option("--view-side", imp->options.view_side, "View grid side (V = n^2)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  imp_cmd->add_option("--light-side", imp->options.light_side, "Light grid side S (M = S^2)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  imp_cmd
+      ->add_option("--resolution", imp->options.resolution,
+                   "Texels per side U; must divide the measured size (0: the measured size)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65536));
+  imp_cmd->add_option("--scale", imp->options.scale, "Multiplies every value")
+      ->capture_default_str();
+  imp_cmd
+      ->add_option("--light-cosine", imp->cosine,
+                   "cell-mean: convert to prtlab's cell-mean cosine; as-stored: keep the values")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cell-mean", "as-stored"}));
+  imp_cmd->add_option("--material", imp->options.material,
+                      "Material name stored in the archive (default: utia:<dir> / ubo:<stem>)");
+  imp_cmd->add_option("--out", imp->out, "BTF archive to write")->required();
+  imp_cmd->add_flag("--json", imp->json, "Print one JSON object (keys in docs/cli.md)");
+  imp_cmd->callback([imp] { run_import(*imp); });
+
+  auto exp_cli = std::make_shared<ExportCli>();
+  CLI::App* exp_cmd = btf->add_subcommand(
+      "export", "Write a BTF (material or file) as a UTIA image directory or a Bonn UBO file");
+  exp_cmd
+      ->add_option("btf", exp_cli->input,
+                   "Material name (generated or taken from the cache) or a BTF archive file")
+      ->required();
+  add_generate_options(exp_cmd, exp_cli->gen);
+  exp_cmd->add_option("--format", exp_cli->format, "utia, ubo-fmf or ubo-bdi")
+      ->required()
+      ->check(CLI::IsMember({"utia", "ubo-fmf", "ubo-bdi"}));
+  exp_cmd
+      ->add_option("--light-cosine", exp_cli->cosine,
+                   "cell-mean (undo prtlab's cell-mean cosine) or as-stored (write the values)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cell-mean", "as-stored"}));
+  exp_cmd->add_flag("--png", exp_cli->png, "utia: 16-bit PNG images instead of float EXR");
+  exp_cmd->add_option("--png-scale", exp_cli->png_scale, "utia --png: the value of a 65535 sample")
+      ->capture_default_str();
+  exp_cmd
+      ->add_option("--components", exp_cli->components,
+                   "ubo-fmf: rank of the truncated SVD (0: exact, no truncation)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1 << 30));
+  exp_cmd->add_option("--scalar-bytes", exp_cli->scalar_bytes, "ubo-fmf: 4 (float) or 2 (half)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({2, 4}));
+  exp_cmd->add_option("--out", exp_cli->out, "Output directory (utia) or file (ubo-*)")->required();
+  exp_cmd->add_flag("--json", exp_cli->json, "Print one JSON object (keys in docs/cli.md)");
+  exp_cmd->callback([exp_cli] { run_export(*exp_cli); });
 }
 
 }  // namespace prt::cli

@@ -10,6 +10,7 @@
 #include "experiment_report.h"
 #include "experiment_run.h"
 #include "experiment_spec.h"
+#include "material_table.h"
 #include "paper_table.h"
 #include "plot_script.h"
 #include "prtlab/base/build_info.h"
@@ -140,9 +141,33 @@ void print_run(const experiments::RunSummary& s, bool json) {
               std::filesystem::exists(s.folder / "images") ? ", images/" : "");
 }
 
+// A material table (kind "material_table", material_table.h) runs its own way.
+nlohmann::json run_table_file(const std::filesystem::path& file, const std::string& variant,
+                              const RunCli& o, ClContext* device) {
+  experiments::MaterialTableOptions mo;
+  mo.out_root = o.out;
+  mo.variant = variant;
+  mo.force = o.force;
+  mo.device = device;
+  mo.command_line = command_line_from_provenance();
+  mo.show_progress = !global_options().quiet;
+  if (!o.scenes.empty()) mo.scene = o.scenes.front();
+  return experiments::run_material_table(file, mo);
+}
+
 void run_file(const RunCli& o) {
   const auto file = experiments::resolve_experiment(o.experiment);
   const std::string variant = variant_of(o);
+  if (experiments::is_material_table(file)) {
+    auto ctx = open_device_from_options();
+    const auto r = run_table_file(file, variant, o, ctx ? &*ctx : nullptr);
+    if (o.json)
+      print_json(r);
+    else
+      std::printf("wrote %s (README.md, result.json, table.csv, images/)\n",
+                  r.at("folder").get<std::string>().c_str());
+    return;
+  }
   // Parse before opening a device: a typo in the file costs nothing.
   (void)experiments::parse_experiment(file, variant, registered_backends());
   auto ctx = open_device_from_options();
@@ -172,6 +197,27 @@ void run_all(const RunCli& o) {
   const auto files = experiments::experiment_files();
   for (const auto& file : files) {
     try {
+      if (experiments::is_material_table(file)) {
+        const auto variants = experiments::material_table_variants(file);
+        if (!variant.empty() &&
+            std::find(variants.begin(), variants.end(), variant) == variants.end()) {
+          if (!quiet)
+            std::fprintf(stderr, "== experiment %s: skipped (no [variant.%s])\n",
+                         file.stem().string().c_str(), variant.c_str());
+          continue;
+        }
+        const auto folder = experiments::material_table_folder(file, variant, o.out);
+        if (!o.force && std::filesystem::exists(folder / ".complete")) {
+          if (!quiet)
+            std::fprintf(stderr, "== experiment %s: %s is complete (--force reruns it)\n",
+                         file.stem().string().c_str(), folder.string().c_str());
+          continue;
+        }
+        if (!quiet) std::fprintf(stderr, "== experiment %s\n", file.stem().string().c_str());
+        const auto r = run_table_file(file, variant, o, ctx ? &*ctx : nullptr);
+        std::printf("wrote %s\n", r.at("folder").get<std::string>().c_str());
+        continue;
+      }
       const auto variants = experiments::experiment_variants(file);
       if (!variant.empty() &&
           std::find(variants.begin(), variants.end(), variant) == variants.end()) {
@@ -209,6 +255,14 @@ void list_experiments(bool json) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& file : experiments::experiment_files()) {
     experiments::ExperimentSpec spec;
+    if (experiments::is_material_table(file)) {
+      list.push_back({{"name", file.stem().string()},
+                      {"title", "material table (docs/experiments.md \"Material tables\")"},
+                      {"file", file.string()},
+                      {"kind", "material_table"},
+                      {"variants", experiments::material_table_variants(file)}});
+      continue;
+    }
     try {
       spec = experiments::parse_experiment(file, "", registered_backends());
     } catch (const Error& e) {

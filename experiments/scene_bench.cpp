@@ -15,22 +15,6 @@
 namespace prt::experiments {
 namespace {
 
-// Exposure (stops) that maps the 99th-percentile luminance of the hit pixels to 0.9, so every
-// backend's PNG of a view uses the exact image's exposure and differences stay visible.
-double exposure_of(const RgbImage& img, std::span<const std::uint8_t> mask) {
-  std::vector<double> lum;
-  for (std::size_t i = 0; i < img.pixels.size(); ++i) {
-    if (!mask.empty() && !mask[i]) continue;
-    const Rgb& p = img.pixels[i];
-    const double y = 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
-    if (std::isfinite(y)) lum.push_back(y);
-  }
-  if (lum.empty()) return 0;
-  const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(lum.size() - 1));
-  std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
-  return lum[k] > 0 ? std::log2(0.9 / lum[k]) : 0.0;
-}
-
 // The procedural sun of the "sun" environments: a sky of unit-ish radiance and a sun `ratio`
 // times brighter, small (0.5 degrees, the real sun's angular radius is 0.27) so that it falls
 // into one or two cubemap pixels: the case where low-frequency bases fail most.
@@ -50,6 +34,20 @@ SunSky sun_environment(double ratio, bool sky, double rotate_deg = 0) {
 }
 
 }  // namespace
+
+double exposure_of(const RgbImage& img, std::span<const std::uint8_t> mask) {
+  std::vector<double> lum;
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+    if (!mask.empty() && !mask[i]) continue;
+    const Rgb& p = img.pixels[i];
+    const double y = 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
+    if (std::isfinite(y)) lum.push_back(y);
+  }
+  if (lum.empty()) return 0;
+  const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(lum.size() - 1));
+  std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
+  return lum[k] > 0 ? std::log2(0.9 / lum[k]) : 0.0;
+}
 
 Cubemap environment_cubemap(const EnvironmentSpec& e, int resolution, double rotate_deg) {
   if (e.sun_ratio)

@@ -4,6 +4,7 @@
 // experiment's environments at the scene's cubemap resolution) and the reference backend's
 // images, against which every point's images are compared.
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,10 @@ struct BenchOptions {
 /// Build the bench of a scene variant for `spec` (stages from `cache`).
 SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec, StageCache& cache,
                          const BenchOptions& options);
+
+/// Exposure (stops) that maps the 99th-percentile luminance of the hit pixels to 0.9, so every
+/// backend's PNG of a view uses the exact image's exposure and differences stay visible.
+double exposure_of(const RgbImage& img, std::span<const std::uint8_t> mask);
 
 /// The radiance cubemap of an environment of the spec at `resolution`, rotated about +y by
 /// `rotate_deg` (a procedural sun turns its direction; an EXR turns its columns).

@@ -72,9 +72,15 @@ TEST_F(ExperimentCli, AllQuickRunsEveryExperimentAndThenSkipsTheCompleteOnes) {
     EXPECT_TRUE(fs::exists(out / name / "README.md")) << name;
     EXPECT_TRUE(fs::exists(out / name / "points.csv")) << name;
   }
+  // The material table, its images on the --scenes scene.
+  EXPECT_TRUE(fs::exists(out / "btf-table-quick" / ".complete"));
+  EXPECT_TRUE(fs::exists(out / "btf-table-quick" / "table.csv"));
+  EXPECT_TRUE(
+      fs::exists(out / "btf-table-quick" / "images" / "tiny-sphere-plane-checker-full.png"));
   const auto again = run_cli(cmd, dir_, env_);
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.err.find("fig6-quick is complete"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("btf-table-quick is complete"), std::string::npos) << again.err;
 
   const auto list = run_cli("experiment list --json", dir_, env_);
   ASSERT_EQ(list.exit_code, 0) << list.err;

@@ -13,6 +13,7 @@
 
 #include "experiment_report.h"
 #include "experiment_spec.h"
+#include "material_table.h"
 #include "plot_script.h"
 #include "point_measurement.h"
 #include "prtlab/base/error.h"
@@ -432,10 +433,16 @@ TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {
   std::vector<std::string> names;
   for (const auto& f : files) {
     names.push_back(f.stem().string());
+    if (is_material_table(f)) {  // its own kind and parser (material_table.h)
+      for (const auto& v : material_table_variants(f))
+        EXPECT_NO_THROW(check_material_table(f, v)) << f;
+      EXPECT_NO_THROW(check_material_table(f, "")) << f;
+      continue;
+    }
     for (const auto& v : experiment_variants(f)) EXPECT_NO_THROW((void)parse(f, v)) << f;
     EXPECT_NO_THROW((void)parse(f)) << f;
   }
-  for (const char* n : {"fig6", "fig8", "pareto"})
+  for (const char* n : {"fig6", "fig8", "pareto", "btf-table"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 

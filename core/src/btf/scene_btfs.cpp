@@ -1,9 +1,19 @@
 #include "prtlab/btf/scene_btfs.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <filesystem>
 #include <map>
 #include <string>
 
+#include "prtlab/base/error.h"
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/btf/btf_materials.h"
+
 namespace prt {
+
+namespace fs = std::filesystem;
 
 std::vector<std::shared_ptr<const Btf>> scene_part_btfs(const SceneDesc& desc, BtfParams params,
                                                         StageCache& cache, bool show_progress,
@@ -14,6 +24,25 @@ std::vector<std::shared_ptr<const Btf>> scene_part_btfs(const SceneDesc& desc, B
   if (cache_hits) *cache_hits = 0;
   for (const ScenePart& part : desc.parts) {
     auto it = by_name.find(part.btf);
+    if (it == by_name.end() && !is_btf_material(part.btf)) {
+      // A BTF file (a measured one from `prtlab btf import`, or any written BTF), relative to
+      // the scene file's folder: it is used at its own texels and views, but its lights must
+      // be the scene's local grid, which shading indexes.
+      fs::path file = part.btf;
+      if (file.is_relative() && !desc.file.empty()) file = desc.file.parent_path() / file;
+      if (!fs::exists(file))
+        throw InputError(
+            desc.file,
+            fmt::format("part '{}': btf '{}' is neither a BTF material "
+                        "({}) nor a file ({} does not exist)",
+                        part.name, part.btf, fmt::join(btf_material_names(), ", "), file.string()));
+      auto btf = std::make_shared<const Btf>(read_btf(file));
+      if (btf->light_side() != desc.local_grid)
+        throw InputError(file, fmt::format("its light side is {}, the scene's local grid is {} "
+                                           "(import it with --light-side {})",
+                                           btf->light_side(), desc.local_grid, desc.local_grid));
+      it = by_name.emplace(part.btf, std::move(btf)).first;
+    }
     if (it == by_name.end()) {
       BtfStageResult r =
           generate_btf_cached(part.btf, params, cache, CacheMode::kUse, show_progress);

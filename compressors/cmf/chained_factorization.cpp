@@ -1,0 +1,246 @@
+#include "cmf/chained_factorization.h"
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "prtlab/base/error.h"
+
+namespace prt::cmf {
+namespace {
+
+// Power iterations stop when the singular value changes by less than this, relatively.
+constexpr double kPowerTolerance = 1e-13;
+constexpr int kPowerIterations = 500;
+// Alternations of the masked rank-1 fit of step 2 (`halfway = svd`).
+constexpr int kMaskedRankOneIterations = 30;
+// Q's refinement is pulled towards its previous value with this weight, relative to the
+// normal matrix's largest diagonal entry, so that halfway cells no sample reaches keep the
+// chain's value instead of falling to 0.
+constexpr double kRefineAnchor = 1e-10;
+
+double norm(std::span<const double> x) {
+  double s = 0;
+  for (double v : x) s += v * v;
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+void rank_one(std::span<const double> a, int rows, int cols, std::span<double> u,
+              std::span<double> v) {
+  std::vector<double> vv(static_cast<std::size_t>(cols), 0.0), uu(static_cast<std::size_t>(rows));
+  for (int c = 0; c < cols; ++c)
+    for (int r = 0; r < rows; ++r) vv[c] += a[static_cast<std::size_t>(c) * rows + r];
+  double sigma = 0;
+  for (int it = 0; it < kPowerIterations; ++it) {
+    const double nv = norm(vv);
+    if (nv == 0) break;
+    for (double& x : vv) x /= nv;
+    std::fill(uu.begin(), uu.end(), 0.0);
+    for (int c = 0; c < cols; ++c)
+      for (int r = 0; r < rows; ++r) uu[r] += a[static_cast<std::size_t>(c) * rows + r] * vv[c];
+    const double nu = norm(uu);
+    if (nu == 0) break;
+    for (double& x : uu) x /= nu;
+    for (int c = 0; c < cols; ++c) {
+      double s = 0;
+      for (int r = 0; r < rows; ++r) s += a[static_cast<std::size_t>(c) * rows + r] * uu[r];
+      vv[c] = s;
+    }
+    const double next = norm(vv);
+    const bool done = std::abs(next - sigma) <= kPowerTolerance * next;
+    sigma = next;
+    if (done) break;
+  }
+  const double root = std::sqrt(sigma);
+  for (int r = 0; r < rows; ++r) u[r] = std::max(uu[r], 0.0) * root;
+  for (int c = 0; c < cols; ++c) v[c] = sigma > 0 ? std::max(vv[c], 0.0) / root : 0.0;
+}
+
+ChainedFactorization::ChainedFactorization(const ChainOptions& options) : o_(options) {
+  PRT_CHECK(o_.light_side >= 1 && o_.view_side >= 1 && o_.half_side >= 1 && o_.diff_side >= 1,
+            "cmf: grid sides must be positive");
+  gshd_ = gshd_resampling(o_.light_side, o_.view_side, o_.half_side, o_.diff_side);
+  w_ = halfway_weights(o_.light_side, o_.view_side, o_.half_side);
+  wt_ = w_.transpose();
+  w_colsum_ = wt_ * Eigen::VectorXd::Ones(w_.rows());
+  if (o_.refine == 0) return;
+  const int h = half_count();
+  std::vector<Eigen::Triplet<double>> t;
+  for (int a = 0; a < h; ++a) t.emplace_back(a, a, 1.0);
+  for (int s = 0; s < w_.rows(); ++s)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator i(w_, s); i; ++i)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator k(w_, s); k; ++k)
+        if (i.col() >= k.col())
+          t.emplace_back(static_cast<int>(i.col()), static_cast<int>(k.col()), 1.0);
+  normal_pattern_.resize(h, h);
+  normal_pattern_.setFromTriplets(t.begin(), t.end());
+  normal_pattern_.makeCompressed();
+  const auto slot = [&](int row, int col) {
+    const int* begin = normal_pattern_.innerIndexPtr() + normal_pattern_.outerIndexPtr()[col];
+    const int* end = normal_pattern_.innerIndexPtr() + normal_pattern_.outerIndexPtr()[col + 1];
+    return static_cast<int>(std::lower_bound(begin, end, row) - normal_pattern_.innerIndexPtr());
+  };
+  sample_begin_.push_back(0);
+  for (int s = 0; s < w_.rows(); ++s) {
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator i(w_, s); i; ++i)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator k(w_, s); k; ++k)
+        if (i.col() >= k.col())
+          sample_slot_.push_back(slot(static_cast<int>(i.col()), static_cast<int>(k.col())));
+    sample_begin_.push_back(static_cast<int>(sample_slot_.size()));
+  }
+  for (int a = 0; a < h; ++a) sample_slot_.push_back(slot(a, a));  // the diagonal, for the anchor
+}
+
+void ChainedFactorization::factor(std::span<const double> f, std::span<double> p,
+                                  std::span<double> q, std::span<double> r) const {
+  const int m = light_count(), v = view_count(), h = half_count();
+  PRT_CHECK(f.size() == static_cast<std::size_t>(m) * v &&
+                p.size() == static_cast<std::size_t>(m) &&
+                q.size() == static_cast<std::size_t>(h) && r.size() == static_cast<std::size_t>(v),
+            "cmf: factor sizes");
+  const Eigen::Map<const Eigen::VectorXd> fv(f.data(), static_cast<Eigen::Index>(f.size()));
+  const double f_mean = fv.mean();
+
+  if (o_.halfway == HalfwayRule::kProject) {
+    const Eigen::VectorXd proj = wt_ * fv;
+    for (int a = 0; a < h; ++a) q[a] = w_colsum_[a] > 0 ? proj[a] / w_colsum_[a] : f_mean;
+  } else {
+    halfway_from_gshd(fv, q);
+  }
+  divide_and_split(f, p, q, r);
+  if (o_.refine > 0) refine(f, p, q, r);
+}
+
+void ChainedFactorization::halfway_from_gshd(const Eigen::Ref<const Eigen::VectorXd>& fv,
+                                             std::span<double> q) const {
+  const int h = half_count(), d = o_.diff_side * o_.diff_side;
+  const double f_mean = fv.mean();
+  // Steps 1 and 2: the halfway factor from the GSHD resampling.
+  const Eigen::VectorXd hd = gshd_.weights * fv;
+  const auto valid = [&](int a, int b) {
+    return gshd_.valid[static_cast<std::size_t>(a) * d + b] != 0;
+  };
+  if (o_.halfway == HalfwayRule::kMean) {
+    for (int a = 0; a < h; ++a) {
+      double sum = 0;
+      int n = 0;
+      for (int b = 0; b < d; ++b)
+        if (valid(a, b)) {
+          sum += hd[static_cast<Eigen::Index>(a) * d + b];
+          ++n;
+        }
+      q[a] = n > 0 ? sum / n : f_mean;
+    }
+  } else {
+    std::vector<double> u(static_cast<std::size_t>(h), 1.0), w(static_cast<std::size_t>(d), 1.0);
+    for (int it = 0; it < kMaskedRankOneIterations; ++it) {
+      for (int a = 0; a < h; ++a) {
+        double num = 0, den = 0;
+        for (int b = 0; b < d; ++b)
+          if (valid(a, b)) {
+            num += hd[static_cast<Eigen::Index>(a) * d + b] * w[b];
+            den += w[b] * w[b];
+          }
+        u[a] = den > 0 ? num / den : 0.0;
+      }
+      for (int b = 0; b < d; ++b) {
+        double num = 0, den = 0;
+        for (int a = 0; a < h; ++a)
+          if (valid(a, b)) {
+            num += hd[static_cast<Eigen::Index>(a) * d + b] * u[a];
+            den += u[a] * u[a];
+          }
+        w[b] = den > 0 ? num / den : 0.0;
+      }
+    }
+    // Dropping the difference factor: each halfway row keeps the mean of its rank-1 model.
+    for (int a = 0; a < h; ++a) {
+      double sum = 0;
+      int n = 0;
+      for (int b = 0; b < d; ++b)
+        if (valid(a, b)) {
+          sum += w[b];
+          ++n;
+        }
+      q[a] = n > 0 ? std::max(u[a] * sum / n, 0.0) : f_mean;
+    }
+  }
+}
+
+void ChainedFactorization::divide_and_split(std::span<const double> f, std::span<double> p,
+                                            std::span<double> q, std::span<double> r) const {
+  const int m = light_count(), v = view_count(), h = half_count();
+  // Step 3: divide Q out in the original samples, rank-1 of the residue.
+  const Eigen::Map<const Eigen::VectorXd> qv(q.data(), h);
+  const Eigen::VectorXd q_io = w_ * qv;
+  const double q_floor = 1e-12 * std::max(qv.maxCoeff(), 0.0);
+  std::vector<double> residue(f.size());
+  for (std::size_t s = 0; s < f.size(); ++s)
+    residue[s] = q_io[static_cast<Eigen::Index>(s)] > q_floor
+                     ? f[s] / q_io[static_cast<Eigen::Index>(s)]
+                     : 0.0;
+  rank_one(residue, m, v, p, r);
+}
+
+void ChainedFactorization::refine(std::span<const double> f, std::span<double> p,
+                                  std::span<double> q, std::span<double> r) const {
+  const int m = light_count(), v = view_count(), h = half_count();
+  Eigen::SparseMatrix<double> normal = normal_pattern_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
+  solver.analyzePattern(normal);
+  Eigen::Map<Eigen::VectorXd> qv(q.data(), h);
+  Eigen::VectorXd rhs(h);
+  for (int it = 0; it < o_.refine; ++it) {
+    // Q given P and R.
+    std::fill(normal.valuePtr(), normal.valuePtr() + normal.nonZeros(), 0.0);
+    rhs.setZero();
+    for (int s = 0; s < w_.rows(); ++s) {
+      const double a = p[s % m] * r[s / m];
+      const double a2 = a * a;
+      int slot = sample_begin_[s];
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator i(w_, s); i; ++i) {
+        rhs[i.col()] += a * f[s] * i.value();
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator k(w_, s); k; ++k)
+          if (i.col() >= k.col())
+            normal.valuePtr()[sample_slot_[slot++]] += a2 * i.value() * k.value();
+      }
+    }
+    const int* diag = sample_slot_.data() + sample_begin_.back();
+    double peak = 0;
+    for (int a = 0; a < h; ++a) peak = std::max(peak, normal.valuePtr()[diag[a]]);
+    if (peak == 0) return;
+    const double anchor = kRefineAnchor * peak;
+    for (int a = 0; a < h; ++a) {
+      normal.valuePtr()[diag[a]] += anchor;
+      rhs[a] += anchor * q[a];
+    }
+    solver.factorize(normal);
+    if (solver.info() != Eigen::Success) return;
+    qv = solver.solve(rhs).cwiseMax(0.0);
+    const Eigen::VectorXd q_io = w_ * qv;
+    // P given Q and R, then R given P and Q.
+    for (int j = 0; j < m; ++j) {
+      double num = 0, den = 0;
+      for (int e = 0; e < v; ++e) {
+        const double b = r[e] * q_io[e * m + j];
+        num += f[static_cast<std::size_t>(e) * m + j] * b;
+        den += b * b;
+      }
+      if (den > 0) p[j] = std::max(num / den, 0.0);
+    }
+    for (int e = 0; e < v; ++e) {
+      double num = 0, den = 0;
+      for (int j = 0; j < m; ++j) {
+        const double b = p[j] * q_io[e * m + j];
+        num += f[static_cast<std::size_t>(e) * m + j] * b;
+        den += b * b;
+      }
+      if (den > 0) r[e] = std::max(num / den, 0.0);
+    }
+  }
+}
+
+}  // namespace prt::cmf

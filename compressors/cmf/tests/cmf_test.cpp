@@ -1,0 +1,207 @@
+// Material cmf (chained matrix factorisation, Suykens et al. 2003): the chain recovers an exact
+// product of three factors (its last step exactly for a rank-1 residue, the whole product by
+// the alternating refinement the paper does not have); clustering with as many clusters as texels
+// is lossless before quantisation; 8-bit storage stays within the bound its steps imply; every
+// ABRDF of a texel-varying product BTF comes back through the material. The material conformance
+// suite covers the OpenCL evaluation against the C++ one, save/load and the declared error.
+#include "cmf/cmf.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "prtlab/btf/btf_generator.h"
+#include "prtlab/btf/btf_materials.h"
+#include "prtlab/btf/halfway_parameterization.h"
+#include "prtlab/compress/material_error.h"
+#include "prtlab/render/factored_material.h"
+
+namespace prt::cmf {
+namespace {
+
+struct Product {
+  std::vector<double> p, q, r, f;
+};
+
+// f_s = P_j (W q)_s R_v with random positive factors (q constant when `flat_q`).
+Product random_product(int light_side, int view_side, int half_side, unsigned seed, bool flat_q) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.2, 1.0);
+  const int m = light_side * light_side, v = view_side * view_side, h = half_side * half_side;
+  Product x;
+  for (int j = 0; j < m; ++j) x.p.push_back(u(rng));
+  for (int a = 0; a < h; ++a) x.q.push_back(flat_q ? 0.5 : u(rng));
+  for (int e = 0; e < v; ++e) x.r.push_back(u(rng));
+  const auto w = halfway_weights(light_side, view_side, half_side);
+  const Eigen::VectorXd q_io = w * Eigen::Map<const Eigen::VectorXd>(x.q.data(), h);
+  for (int s = 0; s < m * v; ++s) x.f.push_back(x.p[s % m] * q_io[s] * x.r[s / m]);
+  return x;
+}
+
+double product_error(const ChainedFactorization& c, const Product& x) {
+  const int m = c.light_count(), v = c.view_count(), h = c.half_count();
+  std::vector<double> p(m), q(h), r(v);
+  c.factor(x.f, p, q, r);
+  const auto w =
+      halfway_weights(c.options().light_side, c.options().view_side, c.options().half_side);
+  const Eigen::VectorXd q_io = w * Eigen::Map<const Eigen::VectorXd>(q.data(), h);
+  double err = 0, peak = 0;
+  for (int s = 0; s < m * v; ++s) {
+    err = std::max(err, std::abs(p[s % m] * q_io[s] * r[s / m] - x.f[s]));
+    peak = std::max(peak, x.f[s]);
+  }
+  return err / peak;
+}
+
+ChainOptions options(int refine, HalfwayRule rule = HalfwayRule::kSvd) {
+  ChainOptions o;
+  o.light_side = 5;
+  o.view_side = 4;
+  o.half_side = 6;
+  o.diff_side = 6;
+  o.halfway = rule;
+  o.refine = refine;
+  return o;
+}
+
+TEST(Cmf, TheLastStepRecoversARankOneResidueExactly) {
+  // Step 3's rank-1 fit of an exact outer product P R^T (the residue of a BTF whose halfway
+  // factor step 2 got right) returns it to rounding.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.2, 1.0);
+  const int rows = 25, cols = 16;
+  std::vector<double> a(rows * cols), x(rows), y(cols), p(rows), r(cols);
+  for (double& v : x) v = u(rng);
+  for (double& v : y) v = u(rng);
+  for (int c = 0; c < cols; ++c)
+    for (int i = 0; i < rows; ++i) a[static_cast<std::size_t>(c) * rows + i] = x[i] * y[c];
+  rank_one(a, rows, cols, p, r);
+  double err = 0;
+  for (int c = 0; c < cols; ++c)
+    for (int i = 0; i < rows; ++i) err = std::max(err, std::abs(p[i] * r[c] - x[i] * y[c]));
+  EXPECT_LT(err, 1e-14);
+}
+
+TEST(Cmf, RefinementRecoversAGeneralProductOfThreeFactors) {
+  // Step 2's averages of a product mix P and R into Q's estimate, so the paper's single pass
+  // leaves an error; the alternating refinement converges (slowly: its sweeps zig-zag along
+  // the coupled factors) to the product.
+  const Product x = random_product(5, 4, 6, 7, false);
+  const double once = product_error(ChainedFactorization(options(0)), x);
+  const double refined = product_error(ChainedFactorization(options(1000)), x);
+  EXPECT_GT(once, 1e-3) << "the single pass should not already be exact here";
+  EXPECT_LT(refined, 1e-6);
+  EXPECT_LT(product_error(ChainedFactorization(options(5)), x), once);
+}
+
+// A BTF whose every texel holds its own exact product (resolution 3, light 4, view 3).
+Btf product_btf(int half_side, bool flat_q) {
+  const int res = 3, vs = 3, ls = 4, m = ls * ls, v = vs * vs;
+  std::vector<float> rgb(static_cast<std::size_t>(res * res) * v * m * 3);
+  for (int t = 0; t < res * res; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const Product x =
+          random_product(ls, vs, half_side, 100u + static_cast<unsigned>(t * 3 + c), flat_q);
+      for (int s = 0; s < m * v; ++s)
+        rgb[(static_cast<std::size_t>(t) * m * v + s) * 3 + c] = static_cast<float>(x.f[s]);
+    }
+  return Btf("product", res, vs, ls, std::move(rgb));
+}
+
+// 6 x 6 texels, 3 x 3 views and lights.
+Btf small_btf(const char* material) {
+  BtfParams bp;
+  bp.resolution = 6;
+  bp.view_side = 3;
+  bp.light_side = 3;
+  bp.supersampling = 1;
+  bp.geometry_grid = 24;
+  return generate_btf(make_btf_material(material, 24), bp);
+}
+
+std::shared_ptr<const CompressedMaterial> compress(const Btf& btf,
+                                                   std::map<std::string, std::string> params) {
+  return compress_material("cmf", params, std::make_shared<const Btf>(btf));
+}
+
+TEST(Cmf, EveryTexelOfAProductBtfComesBackThroughTheMaterial) {
+  const Btf btf = product_btf(5, false);
+  const auto m = compress(
+      btf, {{"half_side", "5"}, {"refine", "2000"}, {"clusters", "0"}, {"quantize", "false"}});
+  // Float factors and the product's own halfway grid: float rounding only.
+  EXPECT_LT(material_error(*m, btf).relative_l2, 1e-5);
+  EXPECT_LT(m->declared_error_bound(), 1e-5);
+}
+
+TEST(Cmf, AsManyClustersAsTexelsIsLosslessBeforeQuantisation) {
+  const Btf btf = small_btf("rings");
+  const std::map<std::string, std::string> common = {{"half_side", "6"}, {"quantize", "false"}};
+  auto unclustered = common, clustered = common, fewer = common;
+  unclustered["clusters"] = "0";
+  clustered["clusters"] = std::to_string(btf.texel_count());
+  fewer["clusters"] = "4";
+  const auto a = compress(btf, unclustered), b = compress(btf, clustered), c = compress(btf, fewer);
+  double diff = 0, peak = 0;
+  for (int t = 0; t < btf.texel_count(); ++t)
+    for (int v = 0; v < btf.view_count(); ++v)
+      for (int j = 0; j < btf.light_count(); ++j)
+        for (int ch = 0; ch < 3; ++ch) {
+          diff = std::max(diff, static_cast<double>(std::abs(a->reflectance(t, v, j)[ch] -
+                                                             b->reflectance(t, v, j)[ch])));
+          peak = std::max(peak, static_cast<double>(std::abs(a->reflectance(t, v, j)[ch])));
+        }
+  EXPECT_LE(diff, 1e-6 * peak);
+  // ... and the test can tell: 4 clusters for 36 texels do lose something.
+  EXPECT_GT(material_error(*c, btf).relative_l2, material_error(*a, btf).relative_l2 + 1e-4);
+}
+
+TEST(Cmf, TheScaleRefitNeverIncreasesTheError) {
+  // With the same codebooks, the least-squares scale per texel and channel is at least as good
+  // as the normalisation's maxima (float storage, so nothing else differs).
+  const Btf btf = small_btf("rings");
+  for (const char* clusters : {"0", "3"}) {
+    const std::map<std::string, std::string> p = {
+        {"half_side", "6"}, {"quantize", "false"}, {"clusters", clusters}};
+    auto with = p, without = p;
+    with["refit_scale"] = "true";
+    without["refit_scale"] = "false";
+    const double a = material_error(*compress(btf, with), btf).relative_l2;
+    const double b = material_error(*compress(btf, without), btf).relative_l2;
+    EXPECT_LE(a, b * (1 + 1e-6)) << clusters << " clusters";
+  }
+}
+
+TEST(Cmf, EightBitStorageStaysWithinTheBoundOfItsSteps) {
+  const Btf btf = small_btf("checker");
+  // Without the scale refit both keep the normalisation's scales, so only quantisation differs.
+  const auto fp =
+      compress(btf, {{"half_side", "6"}, {"quantize", "false"}, {"refit_scale", "false"}});
+  const auto q8 =
+      compress(btf, {{"half_side", "6"}, {"quantize", "true"}, {"refit_scale", "false"}});
+  const auto& sf = dynamic_cast<const FactoredMaterial&>(*fp).state();
+  const auto& sq = dynamic_cast<const FactoredMaterial&>(*q8).state();
+  ASSERT_EQ(sf.index_p, sq.index_p);  // one clustering, then quantisation
+  // Each normalised factor value moves by at most half its entry's step (<= 1/510 of the
+  // entry's maximum, itself <= 1), the scale by half its channel's step; with all factors in
+  // [0, 1] a product P Q R moves by at most the sum of the three moves (plus their products).
+  for (int t = 0; t < btf.texel_count(); ++t) {
+    const double dp = 0.5 * sq.entry_scale_p[sq.index_p[t]],
+                 dq = 0.5 * sq.entry_scale_q[sq.index_q[t]],
+                 dr = 0.5 * sq.entry_scale_r[sq.index_r[t]];
+    const double prod = (1 + dp) * (1 + dq) * (1 + dr) - 1;
+    for (int v = 0; v < btf.view_count(); ++v)
+      for (int j = 0; j < btf.light_count(); ++j)
+        for (int c = 0; c < 3; ++c) {
+          const double s = sf.scale[static_cast<std::size_t>(t) * 3 + c];
+          const double ds = 0.5 * sq.scale_global[c] + 1e-6 * s;
+          const double bound = (s + ds) * prod * 1.0001 + ds + 1e-7 * s;
+          EXPECT_LE(std::abs(fp->reflectance(t, v, j)[c] - q8->reflectance(t, v, j)[c]), bound)
+              << "texel " << t << " view " << v << " light " << j << " channel " << c;
+        }
+  }
+}
+
+}  // namespace
+}  // namespace prt::cmf

@@ -1,0 +1,87 @@
+// A material stored as three factors per texel, f = s P(d) Q(h) R(e) per channel
+// (render/factored_material.h: the `cmf` and `hf` materials of Suykens et al. 2003). For a hit,
+// prt_material_begin folds the light-independent part of each texel sample, its filter weight
+// x scale x R(e) (R read at the 4 view samples around e); each light then reads P at its bin
+// and Q at the 4 halfway-grid samples around normalize(d_j + e). Implements the material
+// contract of compress/material_compressor.h; kernels/btf_lookup.cl comes before this file.
+//
+// Data:
+//   fm_books    every part's P, Q and R codebooks, packed float RGB
+//   fm_texels   per texel of every part: the float offsets of its P, Q and R entries in fm_books
+//   fm_scales   per texel: the RGB scale
+//   fm_info     per part: (U, view_side, half_side, first texel in fm_texels / fm_scales)
+//   fm_lights   the M light directions (xyz)
+
+#define PRT_MATERIAL_PARAMS                                                              \
+  , __global const float *restrict fm_books, __global const uint4 *restrict fm_texels, \
+      __global const float4 *restrict fm_scales, __global const int4 *restrict fm_info, \
+      __global const float4 *restrict fm_lights
+#define PRT_MATERIAL_ARGS , fm_books, fm_texels, fm_scales, fm_info, fm_lights
+
+typedef struct {
+  float3 e;
+  int half_side;
+  int n;
+  uint p[PRT_TEXELS];
+  uint q[PRT_TEXELS];
+  float3 coef[PRT_TEXELS];
+} prt_material;
+
+float3 fm_load3(__global const float* p) {
+  return (float3)(p[0], p[1], p[2]);
+}
+
+void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
+  const int4 info = fm_info[part];
+  const int res = info.x, side = info.y;
+  m->e = prt_clamp_to_hemisphere(view);
+  m->half_side = info.z;
+  int texels[4];
+  float texel_w[4];
+  const int count = prt_texel_samples(res, uv, texels, texel_w);
+  int views[4];
+  float view_w[4];
+  prt_view_samples(side, m->e, views, view_w);
+  for (int t = 0; t < count; ++t) {
+    const uint4 off = fm_texels[info.w + texels[t]];
+    float3 re = (float3)(0.0f);
+    for (int k = 0; k < 4; ++k) re += view_w[k] * fm_load3(fm_books + off.z + views[k] * 3);
+    m->p[t] = off.x;
+    m->q[t] = off.y;
+    m->coef[t] = (texel_w[t] * fm_scales[info.w + texels[t]].xyz) * re;
+  }
+  m->n = count;
+}
+
+float3 fm_light(const prt_material* m, int j PRT_MATERIAL_PARAMS) {
+  const float3 h = normalize(fm_lights[j].xyz + m->e);
+  int cells[4];
+  float w[4];
+  prt_view_samples(m->half_side, h, cells, w);
+  float3 sum = (float3)(0.0f);
+  for (int t = 0; t < m->n; ++t) {
+    __global const float* q = fm_books + m->q[t];
+    float3 qv = (float3)(0.0f);
+    for (int k = 0; k < 4; ++k) qv += w[k] * fm_load3(q + cells[k] * 3);
+    sum += m->coef[t] * fm_load3(fm_books + m->p[t] + j * 3) * qv;
+  }
+  return sum;
+}
+
+void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,
+                        float4* b2 PRT_MATERIAL_PARAMS) {
+  const int j = c / 3;
+  const float3 v0 = fm_light(m, j PRT_MATERIAL_ARGS);
+  const float3 v1 = fm_light(m, j + 1 PRT_MATERIAL_ARGS);
+  const float3 v2 = fm_light(m, j + 2 PRT_MATERIAL_ARGS);
+  const float3 v3 = fm_light(m, j + 3 PRT_MATERIAL_ARGS);
+  *b0 = (float4)(v0.x, v0.y, v0.z, v1.x);
+  *b1 = (float4)(v1.y, v1.z, v2.x, v2.y);
+  *b2 = (float4)(v2.z, v3.x, v3.y, v3.z);
+}
+
+float prt_material_one(const prt_material* m, int c PRT_MATERIAL_PARAMS) {
+  const float3 v = fm_light(m, c / 3 PRT_MATERIAL_ARGS);
+  const int ch = c % 3;
+  return ch == 0 ? v.x : (ch == 1 ? v.y : v.z);
+}
