@@ -280,8 +280,10 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
   if (fs::exists(folder / ".complete") && !o.force)
     throw ParameterError(
         fmt::format("{} holds a complete run (--force reruns it)", folder.string()));
-  fs::create_directories(folder / "images");
   fs::remove(folder / ".complete");
+  // Images of an earlier run (materials since renamed or removed) must not stay beside new ones.
+  fs::remove_all(folder / "images");
+  fs::create_directories(folder / "images");
   const Provenance prov = collect_provenance(o.command_line, o.device);
   StageCache cache;
   json rows = json::array();
