@@ -12,13 +12,6 @@ MaterialEntry registry_entry() {
       "chained matrix factorisation (Suykens et al. 2003): each ABRDF as P(light) Q(halfway) "
       "R(view), clustered codebooks with index and scale maps, 8-bit factors";
   e.params = {
-      {"half_side",
-       ParamType::kInt,
-       "16",
-       2,
-       64,
-       {},
-       "side of the halfway-vector grid Q is stored on (half_side^2 directions)"},
       {"diff_side",
        ParamType::kInt,
        "8",
@@ -62,12 +55,10 @@ MaterialEntry registry_entry() {
       if (with.diff_side == 0) with.diff_side = with.half_side;
       return channel_factorizer(std::make_shared<const ChainedFactorization>(with));
     };
-    return std::make_unique<FactoredCompressor>(std::string(kName), o.half_side, setup,
-                                                factor_coding(p), nlohmann::json(p.canonical()));
+    return std::make_unique<FactoredCompressor>(std::string(kName), setup, factor_coding(p),
+                                                nlohmann::json(p.canonical()));
   };
-  e.load = [](const ArchiveReader& r) -> std::unique_ptr<CompressedMaterial> {
-    return FactoredMaterial::load(r, std::string(kName));
-  };
+  e.load = factored_loader(std::string(kName));
   return e;
 }
 

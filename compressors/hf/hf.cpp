@@ -13,13 +13,6 @@ MaterialEntry registry_entry() {
       "ABRDF as P(light) Q(halfway) R(view) by least squares in logarithms with a Laplacian "
       "regulariser, then clustered and 8-bit like cmf";
   e.params = {
-      {"half_side",
-       ParamType::kInt,
-       "16",
-       2,
-       64,
-       {},
-       "side of the halfway-vector grid Q is stored on (half_side^2 directions)"},
       {"lambda",
        ParamType::kReal,
        "0.1",
@@ -50,12 +43,10 @@ MaterialEntry registry_entry() {
       with.view_side = btf.view_side();
       return channel_factorizer(std::make_shared<const HomomorphicFactorization>(with));
     };
-    return std::make_unique<FactoredCompressor>(std::string(kName), o.half_side, setup,
-                                                factor_coding(p), nlohmann::json(p.canonical()));
+    return std::make_unique<FactoredCompressor>(std::string(kName), setup, factor_coding(p),
+                                                nlohmann::json(p.canonical()));
   };
-  e.load = [](const ArchiveReader& r) -> std::unique_ptr<CompressedMaterial> {
-    return FactoredMaterial::load(r, std::string(kName));
-  };
+  e.load = factored_loader(std::string(kName));
   return e;
 }
 

@@ -100,8 +100,8 @@ TEST(Hf, OneFactorisedSystemGivesEachTexelTheSolutionAFreshSystemGives) {
   shared.solve_log(y1, a);
   shared.solve_log(y2, b);
   HomomorphicFactorization(options(0.1)).solve_log(y2, c);
-  EXPECT_EQ(b, c);
-  EXPECT_LT(log_residual(0.1, y2), log_residual(0.1, y1) + 1.0);  // both are fits, not garbage
+  EXPECT_EQ(b, c);  // the first solve left no state behind
+  EXPECT_NE(a, b);
 }
 
 TEST(Hf, ParallelCompressionEqualsSerialBitForBit) {

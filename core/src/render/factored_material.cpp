@@ -601,8 +601,11 @@ std::unique_ptr<FactoredMaterial> encode_factored_material(
   }
   if (times) times->quantization_seconds = seconds_since(t0);
   if (times)
-    st.timings = {{"clustering_seconds", times->clustering_seconds},
-                  {"quantization_seconds", times->quantization_seconds}};
+    st.timings = {{"factorization_seconds", times->factorization_seconds},
+                  {"clustering_seconds", times->clustering_seconds},
+                  {"quantization_seconds", times->quantization_seconds},
+                  {"abrdfs", texels},
+                  {"samples_per_abrdf", full.light_count() * full.view_count()}};
   st.codebook_p = std::move(bp.entries);
   st.codebook_q = std::move(bq.entries);
   st.codebook_r = std::move(br.entries);
@@ -651,15 +654,10 @@ std::unique_ptr<FactoredMaterial> compress_factored(const std::string& backend, 
                btf.texel_count());
   const AbrdfFactors factors = factor_texels(btf, half_side * half_side, factor, backend, bar);
   bar.finish();
-  const double seconds = setup_seconds + seconds_since(t0);
   FactorCodingTimes times;
-  auto material = encode_factored_material(backend, btf, half_side, factors, coding,
-                                           std::move(parameters), &times);
-  FactoredMaterial::State state = material->state();
-  state.timings["factorization_seconds"] = seconds;
-  state.timings["abrdfs"] = btf.texel_count();
-  state.timings["samples_per_abrdf"] = btf.light_count() * btf.view_count();
-  return std::make_unique<FactoredMaterial>(std::move(state));
+  times.factorization_seconds = setup_seconds + seconds_since(t0);
+  return encode_factored_material(backend, btf, half_side, factors, coding, std::move(parameters),
+                                  &times);
 }
 
 }  // namespace prt
@@ -668,6 +666,7 @@ namespace prt {
 
 FactorCoding factor_coding(const ParamSet& p) {
   FactorCoding c;
+  c.half_side = static_cast<int>(p.get_int("half_side"));
   c.clusters = static_cast<int>(p.get_int("clusters"));
   c.quantize = p.get_bool("quantize");
   c.refit_scale = p.get_bool("refit_scale");
@@ -677,7 +676,14 @@ FactorCoding factor_coding(const ParamSet& p) {
 }
 
 std::vector<ParamSpec> factor_coding_params() {
-  return {{"clusters",
+  return {{"half_side",
+           ParamType::kInt,
+           "16",
+           2,
+           64,
+           {},
+           "side of the halfway-vector grid Q is stored on (half_side^2 directions)"},
+          {"clusters",
            ParamType::kInt,
            "256",
            0,
@@ -715,10 +721,9 @@ std::vector<ParamSpec> factor_coding_params() {
 
 namespace prt {
 
-FactoredCompressor::FactoredCompressor(std::string backend, int half_side, Setup setup,
-                                       FactorCoding coding, nlohmann::json parameters)
+FactoredCompressor::FactoredCompressor(std::string backend, Setup setup, FactorCoding coding,
+                                       nlohmann::json parameters)
     : backend_(std::move(backend)),
-      half_side_(half_side),
       setup_(std::move(setup)),
       coding_(coding),
       parameters_(std::move(parameters)) {}
@@ -728,10 +733,22 @@ std::unique_ptr<CompressedMaterial> FactoredCompressor::compress(const MaterialI
   if (!input.btf) throw ParameterError(fmt::format("material {}: no BTF given", backend_));
   const auto t0 = std::chrono::steady_clock::now();
   const ChannelFactorizer factor = setup_(*input.btf);
-  auto material = compress_factored(backend_, *input.btf, half_side_, factor, coding_, parameters_,
-                                    seconds_since(t0));
+  auto material = compress_factored(backend_, *input.btf, coding_.half_side, factor, coding_,
+                                    parameters_, seconds_since(t0));
   progress.finish();
   return material;
+}
+
+}  // namespace prt
+
+namespace prt {
+
+std::function<std::unique_ptr<CompressedMaterial>(const ArchiveReader&)> factored_loader(
+    std::string backend) {
+  return [backend =
+              std::move(backend)](const ArchiveReader& r) -> std::unique_ptr<CompressedMaterial> {
+    return FactoredMaterial::load(r, backend);
+  };
 }
 
 }  // namespace prt

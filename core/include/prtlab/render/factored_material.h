@@ -48,6 +48,7 @@ struct AbrdfFactors {
 };
 
 struct FactorCoding {
+  int half_side = 16;  ///< Q's grid: half_side x half_side halfway directions
   int clusters = 256;  ///< per factor set, at most the texel count; 0: no clustering
   bool quantize = true;
   bool refit_scale = true;  ///< least-squares texel scales after clustering (not in the paper)
@@ -56,13 +57,16 @@ struct FactorCoding {
   int kmeans_iterations = 50;
 };
 
-/// The coding parameters every factored material backend takes (clusters, quantize; the shared
-/// seed seeds k-means++), read from `p`; factor_coding_params() declares the first two.
+/// The parameters every factored material backend takes (half_side, clusters, quantize,
+/// refit_scale, code_gamma; the shared seed seeds k-means++), read from `p`;
+/// factor_coding_params() declares them.
 FactorCoding factor_coding(const ParamSet& p);
 std::vector<ParamSpec> factor_coding_params();
 
-/// Seconds spent in encode_factored_material's steps (reported by `btf-table`).
+/// Seconds of a factored compression (reported by `btf-table`): factorization_seconds is the
+/// caller's, recorded in the material's timings; the others encode_factored_material measures.
 struct FactorCodingTimes {
+  double factorization_seconds = 0;
   double clustering_seconds = 0;
   double quantization_seconds = 0;
 };
@@ -155,22 +159,25 @@ std::unique_ptr<FactoredMaterial> compress_factored(const std::string& backend, 
 
 /// The MaterialCompressor of a factored material backend: compress() calls `setup` once per BTF
 /// (what depends only on the sampling; timed with the factorisation) for the channel
-/// factoriser, then compress_factored. `half_side` is the Q grid's side.
+/// factoriser, then compress_factored with coding.half_side.
 class FactoredCompressor final : public MaterialCompressor {
  public:
   using Setup = std::function<ChannelFactorizer(const Btf& btf)>;
-  FactoredCompressor(std::string backend, int half_side, Setup setup, FactorCoding coding,
+  FactoredCompressor(std::string backend, Setup setup, FactorCoding coding,
                      nlohmann::json parameters);
   std::unique_ptr<CompressedMaterial> compress(const MaterialInput& input,
                                                Progress& progress) const override;
 
  private:
   std::string backend_;
-  int half_side_;
   Setup setup_;
   FactorCoding coding_;
   nlohmann::json parameters_;
 };
+
+/// A MaterialEntry::load for `backend`: FactoredMaterial::load.
+std::function<std::unique_ptr<CompressedMaterial>(const ArchiveReader&)> factored_loader(
+    std::string backend);
 
 /// Steps 1-3 of the file comment, then the error against `full` (stored as the declared
 /// bound). `parameters` records the fit's parameters.
