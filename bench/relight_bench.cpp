@@ -30,6 +30,11 @@
 //   and OpenCL) 1.5-1.8x and not the uncompressed one, and in registration order they fell on
 //   whichever benchmarks ran then (compressors/bicluster/README.md, "Noise").
 //
+// Another scene: PRTLAB_BENCH_SCENE=<scene> (e.g. armor, bunny-48k); only some backends (their
+// inputs alone are prepared): PRTLAB_BENCH_BACKENDS=bicluster,uncompressed. The summary then
+// gives each backend's OpenCL speed-up over `uncompressed` beside its FLOP model (uncompressed
+// FLOPs / the backend's FLOPs per relight) and the ratio of the two.
+//
 // The bunny's transfer comes from the stage cache ($PRTLAB_CACHE), computed on the first run;
 // without the bunny's data, a synthetic matrix of its shape (210,304 x 6,144, ~8.7 M non-zeros)
 // stands in and the context says so.
@@ -41,6 +46,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <optional>
@@ -94,14 +100,38 @@ prt::TransferMatrix synthetic_bunny_shape(std::mt19937_64& rng) {
   return prt::random_transfer(rng(), spec);
 }
 
+std::string bench_scene() {
+  const char* s = std::getenv("PRTLAB_BENCH_SCENE");
+  return s && *s ? s : "bunny";
+}
+
+// The backends to benchmark: PRTLAB_BENCH_BACKENDS (comma-separated), else every registered one.
+std::vector<std::string> bench_backends() {
+  const char* s = std::getenv("PRTLAB_BENCH_BACKENDS");
+  if (!s || !*s) return prt::CompressorRegistry::instance().names();
+  std::vector<std::string> out;
+  std::string item;
+  for (const char* c = s;; ++c) {
+    if (*c == ',' || *c == '\0') {
+      if (!item.empty()) out.push_back(prt::CompressorRegistry::instance().get(item).name);
+      item.clear();
+      if (*c == '\0') break;
+    } else {
+      item += *c;
+    }
+  }
+  return out;
+}
+
 Workload make_workload() {
   Workload w;
   std::mt19937_64 rng(20240613);
+  const std::string scene = bench_scene();
   try {
-    const prt::SceneDesc desc = prt::parse_scene(prt::resolve_scene("bunny"));
+    const prt::SceneDesc desc = prt::parse_scene(prt::resolve_scene(scene));
     prt::StageCache cache;
-    // Whatever the registered backends declare they need (SH, mesh, BTFs), prepared once.
-    const auto names = prt::CompressorRegistry::instance().names();
+    // Whatever the benchmarked backends declare they need (SH, mesh, BTFs), prepared once.
+    const auto names = bench_backends();
     w.scene = prt::prepare_scene_for(desc, names, cache);
     const prt::SceneTransfer& st = w.scene->transfer;
     w.transfer = st.result.transfer;
@@ -109,9 +139,13 @@ Workload make_workload() {
     w.resolution = desc.cubemap_resolution;
     w.grid_side = desc.local_grid;
     w.source =
-        fmt::format("bunny ({} vertices, transfer {} in {:.1f} s)", w.transfer.vertex_count(),
+        fmt::format("{} ({} vertices, transfer {} in {:.1f} s)", scene, w.transfer.vertex_count(),
                     st.cache_hit ? "from the stage cache" : "computed", st.seconds);
   } catch (const std::exception& e) {
+    if (scene != "bunny") {
+      std::fprintf(stderr, "scene %s unavailable: %s\n", scene.c_str(), e.what());
+      std::exit(2);
+    }
     std::fprintf(stderr, "bunny unavailable (%s); using a synthetic matrix of its shape\n",
                  e.what());
     w.transfer = synthetic_bunny_shape(rng);
@@ -257,6 +291,7 @@ Prepared& prepared(const std::string& backend, const Params& params) {
 
 void add_counters(benchmark::State& state, double seconds_per_relight, double terms, double bytes) {
   state.counters["ms"] = seconds_per_relight * 1e3;
+  state.counters["MFLOP"] = 2.0 * terms * 1e-6;
   state.counters["Gterm/s"] = terms / seconds_per_relight * 1e-9;
   state.counters["GB/s"] = bytes / seconds_per_relight * 1e-9;
   state.counters["%bw"] = 100.0 * bytes / seconds_per_relight * 1e-9 / measured_bandwidth();
@@ -423,6 +458,7 @@ class CollectingReporter : public benchmark::ConsoleReporter {
     double gbps = 0;
     double pct = 0;
     double ns_term = 0;
+    double mflop = 0;
     bool error = false;
     std::string message;
   };
@@ -444,7 +480,8 @@ class CollectingReporter : public benchmark::ConsoleReporter {
         const auto c = r.counters.find(key);
         return c == r.counters.end() ? 0.0 : c->second.value;
       };
-      results_[name] = {get("ms"), get("GB/s"), get("%bw"), get("ns/term"), false, {}};
+      results_[name] = {get("ms"),    get("GB/s"), get("%bw"), get("ns/term"),
+                        get("MFLOP"), false,       {}};
     }
     ConsoleReporter::ReportRuns(runs);
   }
@@ -514,6 +551,20 @@ void print_summary(const CollectingReporter& rep) {
         "%.3f ms, %.2fx -> %s\n",
         bic_ocl->ms, ocl->ms, ocl->ms / bic_ocl->ms,
         ocl->ms >= 2.0 * bic_ocl->ms ? "met" : "NOT met");
+  // Every backend's OpenCL relight against uncompressed's, beside its FLOP model.
+  if (ocl && ocl->mflop > 0) {
+    for (const auto& [name, r] : rep.all()) {
+      if (r.error || !name.starts_with("relight/") || !name.ends_with("/opencl") ||
+          name == "relight/uncompressed/opencl" || r.mflop <= 0 || r.ms <= 0)
+        continue;
+      const double speedup = ocl->ms / r.ms, model = ocl->mflop / r.mflop;
+      std::printf(
+          "  MODEL %s: %.3f ms vs uncompressed %.3f ms = %.2fx; FLOP model %.2fx (%.2f of %.2f "
+          "MFLOPs); %.0f%% of the model\n",
+          name.c_str(), r.ms, ocl->ms, speedup, model, r.mflop, ocl->mflop,
+          100.0 * speedup / model);
+    }
+  }
   const auto hot = rep.get("relight/csr_cache_resident/cpp");
   if (one && hot) {
     // Equal per-entry costs with and without memory traffic: the loop is bound by per-entry work
@@ -536,7 +587,7 @@ void register_benchmarks() {
       ->ArgName("threads")
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond);
-  for (const auto& name : prt::CompressorRegistry::instance().names()) {
+  for (const auto& name : bench_backends()) {
     benchmark::RegisterBenchmark(("relight/" + name + "/cpp").c_str(), BM_BackendCpp, name)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);

@@ -245,7 +245,50 @@ void BM_shading(benchmark::State& state, Pass pass, prt::TexelFilter filter) {
   state.counters["hit_pixels"] = static_cast<double>(shader.hit_pixels());
 }
 
+// ---- the view change's host stages ------------------------------------------------------------
+
+// The G-buffer of the bunny's front view traced into a reused GBuffer (as FrameRenderer does).
+void BM_gbuffer(benchmark::State& state, prt::PrimaryRays rays) {
+  const Workload& w = workload();
+  if (!w.error.empty()) return state.SkipWithError(w.error.c_str());
+  const prt::GBufferTracer tracer(w.scene.mesh);
+  const prt::Camera cam = prt::scene_camera(w.scene, "front");
+  prt::GBuffer g;
+  tracer.trace(cam, g, rays);
+  for (auto _ : state) {
+    tracer.trace(cam, g, rays);
+    benchmark::DoNotOptimize(g.triangle.data());
+  }
+  state.counters["hit_pixels"] = static_cast<double>(g.hit_count());
+}
+
+// DeviceBtfShader::set_gbuffer: compaction to the hit slots, the misses' background pixels, the
+// upload.
+void BM_gbuffer_upload(benchmark::State& state) {
+  prt::ClContext* ctx = prt::default_context();
+  if (!ctx) return state.SkipWithError("no OpenCL device");
+  const Workload& w = workload();
+  if (!w.error.empty()) return state.SkipWithError(w.error.c_str());
+  prt::DeviceBtfShader shader(*ctx, w.scene.mesh, w.materials, w.environment.get());
+  shader.set_gbuffer(w.gbuffer);
+  for (auto _ : state) {
+    shader.set_gbuffer(w.gbuffer);
+    ctx->queue().finish();
+  }
+}
+
 void register_benchmarks() {
+  benchmark::RegisterBenchmark(
+      "gbuffer/single_rays", [](benchmark::State& s) { BM_gbuffer(s, prt::PrimaryRays::kSingle); })
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+  benchmark::RegisterBenchmark(
+      "gbuffer/packets", [](benchmark::State& s) { BM_gbuffer(s, prt::PrimaryRays::kPackets); })
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+  benchmark::RegisterBenchmark("gbuffer/upload", BM_gbuffer_upload)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
   for (const auto& [fname, filter] : {std::pair{"nearest", prt::TexelFilter::kNearest},
                                       std::pair{"bilinear", prt::TexelFilter::kBilinear}}) {
     for (const auto& [pname, pass] :

@@ -376,14 +376,176 @@ LoopResult summarise(const std::vector<FrameStageTimes>& frames, const FrameCoun
   return r;
 }
 
-// The paper's "view / light" fps of Table I (experiments/paper_numbers.h), when it lists the
-// scene.
-std::optional<std::pair<double, double>> paper_fps(const std::string& scene) {
-  const auto row = experiments::paper_row(experiments::PaperTable::kTable1, scene);
-  if (!row || row->fps.empty()) return std::nullopt;
-  const auto slash = row->fps.find('/');
-  if (slash == std::string::npos) return std::nullopt;
-  return std::pair{std::stod(row->fps.substr(0, slash)), std::stod(row->fps.substr(slash + 1))};
+// The paper's "view / light" fps for the scene (experiments/paper_numbers.h): Table I for its
+// four scenes, else Table II (the bunny sizes), when a table lists the scene.
+struct PaperFps {
+  double view = 0, light = 0;
+  std::string table;
+};
+std::optional<PaperFps> paper_fps(const std::string& scene) {
+  for (const auto& [table, name] : {std::pair{experiments::PaperTable::kTable1, "Table I"},
+                                    std::pair{experiments::PaperTable::kTable2, "Table II"}}) {
+    const auto row = experiments::paper_row(table, scene);
+    if (!row || row->fps.empty()) continue;
+    const auto slash = row->fps.find('/');
+    if (slash == std::string::npos) continue;
+    return PaperFps{std::stod(row->fps.substr(0, slash)), std::stod(row->fps.substr(slash + 1)),
+                    name};
+  }
+  return std::nullopt;
+}
+
+std::string fmt_ms(double v) {
+  return fmt::format("{:.2f}", v);
+}
+
+// ---- per-stage cost model ----------------------------------------------------------------------
+//
+// What each stage of a frame moves and computes, from the counts the frame loop knows (docs/
+// rendering.md "Cost model"): a stage on a device of read/write bandwidth B, arithmetic rate F
+// and host link H takes about max(bytes / B, flops / F) (device stages) or bytes / H (uploads).
+// The G-buffer is traced on the host here; on a GPU it would be rasterised (the paper's way),
+// modelled as writing its per-pixel fields once.
+struct StageCost {
+  std::string stage;
+  double bytes = 0;  ///< device memory traffic (or, for uploads, bytes over the host link)
+  double flops = 0;
+  bool upload = false;
+  double measured_ms = 0;  ///< this run's median (0: not separately measured)
+};
+
+struct DeviceProfile {
+  std::string name;
+  double gbps = 0, gflops = 0, link_gbps = 0;
+};
+
+// Nominal peak figures (vendor data sheets): the paper's GPU and the one prtlab's device
+// machines carry.
+const std::vector<DeviceProfile>& model_devices() {
+  static const std::vector<DeviceProfile> d = {
+      {"GTX 280 (the paper's, 2008)", 141.7, 933.0, 6.0},
+      {"H200 (SXM)", 4800.0, 67000.0, 50.0},
+  };
+  return d;
+}
+
+double model_ms(const StageCost& c, const DeviceProfile& d) {
+  if (c.upload) return c.bytes / (d.link_gbps * 1e6);
+  return std::max(c.bytes / (d.gbps * 1e6), c.flops / (d.gflops * 1e6));
+}
+
+// m: values of the materials' light basis per vertex (L*) and per reflectance vector.
+std::vector<StageCost> view_change_costs(const FrameRenderer& r, const FrameCosts& costs,
+                                         const LoopResult& view, double m) {
+  std::vector<StageCost> out;
+  const DeviceBtfShader* shader = r.device_shader();
+  const GBuffer& g = r.gbuffer();
+  const double pixels = static_cast<double>(g.pixel_count());
+  const double hits = static_cast<double>(g.hit_count());
+  // G-buffer: the fields shading reads (triangle, part, barycentrics, UV, view: 40 bytes a hit)
+  // plus the miss code of every pixel, written once.
+  out.push_back({"G-buffer", hits * 40.0 + pixels * 4.0, 0.0, false, view.stages.gbuffer_ms});
+  out.push_back(
+      {"G-buffer upload", hits * 44.0 + pixels * 4.0, 0.0, true, view.stages.gbuffer_upload_ms});
+  if (shader) {
+    const auto b = shader->bytes_per_pass();
+    // The view cache pass also reads 3 vertices' L* and writes the hit pixels.
+    const double lstar = 3.0 * m * 12.0 * hits;
+    out.push_back({"view cache + shade hits", static_cast<double>(b.view_cache) + lstar + hits * 12,
+                   3.0 * costs.material_flops_per_pixel * hits, false,
+                   view.stages.view_cache_kernel_ms});
+    out.push_back({"misses (background)", (pixels - hits) * 16.0 + pixels * 4.0, 0.0, false,
+                   view.stages.shade_kernel_ms - view.stages.view_cache_kernel_ms});
+  }
+  return out;
+}
+
+std::vector<StageCost> light_change_costs(const FrameRenderer& r, const FrameCosts& costs,
+                                          const LoopResult& light, double m) {
+  std::vector<StageCost> out;
+  const DeviceBtfShader* shader = r.device_shader();
+  const GBuffer& g = r.gbuffer();
+  const double pixels = static_cast<double>(g.pixel_count());
+  const double hits = static_cast<double>(g.hit_count());
+  const double culled = r.culls() ? static_cast<double>(r.visible_vertices().size()) /
+                                        static_cast<double>(r.mesh().positions.size())
+                                  : 1.0;
+  // The relight reads its stored state once (the share of the visible vertices when culled),
+  // the light vector, and writes L*.
+  out.push_back({"relight",
+                 static_cast<double>(costs.transfer_bytes) * culled +
+                     static_cast<double>(r.mesh().positions.size()) * culled * m * 12.0,
+                 costs.transfer_flops * culled, false, light.stages.relight_kernel_ms});
+  if (shader) {
+    out.push_back({"cached shade",
+                   static_cast<double>(shader->bytes_per_pass().cached_shade) + pixels * 16.0,
+                   hits * 3.0 * 2.0 * m, false, light.stages.shade_kernel_ms});
+  }
+  return out;
+}
+
+std::string cost_model_markdown(const std::vector<StageCost>& view,
+                                const std::vector<StageCost>& light) {
+  std::string md = "\n## Cost model\n\n";
+  md +=
+      "Bytes each stage moves and FLOPs it does, counted from this frame loop (docs/rendering.md "
+      "\"Cost model\"), and the time they imply on a device: max(bytes / bandwidth, FLOPs / peak) "
+      "for device stages, bytes / host link for uploads, with nominal peak figures. The G-buffer "
+      "is traced with Embree on the host here; on a GPU it would be rasterised, modelled as "
+      "writing its fields once. `measured` is this run's median (device kernel time where there "
+      "is one); `GB/s here` the traffic it achieved.\n\n";
+  md += "| change | stage | MB | MFLOPs | measured ms | GB/s here |";
+  for (const auto& d : model_devices()) md += fmt::format(" model ms, {} |", d.name);
+  md += "\n|---|---|---:|---:|---:|---:|";
+  for (std::size_t i = 0; i < model_devices().size(); ++i) md += "---:|";
+  md += "\n";
+  std::vector<double> total(model_devices().size(), 0.0);
+  std::vector<double> total_light(model_devices().size(), 0.0);
+  const auto rows = [&](const char* change, const std::vector<StageCost>& costs,
+                        std::vector<double>& sum) {
+    for (const StageCost& c : costs) {
+      md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {} | {} |", change, c.stage, c.bytes / 1e6,
+                        c.flops / 1e6, c.measured_ms > 0 ? fmt_ms(c.measured_ms) : std::string("—"),
+                        c.measured_ms > 0 ? fmt::format("{:.1f}", c.bytes / (c.measured_ms * 1e6))
+                                          : std::string("—"));
+      for (std::size_t i = 0; i < model_devices().size(); ++i) {
+        const double t = model_ms(c, model_devices()[i]);
+        sum[i] += t;
+        md += fmt::format(" {:.3f} |", t);
+      }
+      md += "\n";
+    }
+  };
+  rows("view", view, total);
+  rows("light", light, total_light);
+  md += "| **view** | **frame (model fps)** | | | | |";
+  for (const double t : total) md += fmt::format(" {:.3f} ({:.0f}) |", t, t > 0 ? 1e3 / t : 0.0);
+  md += "\n| **light** | **frame (model fps)** | | | | |";
+  for (const double t : total_light)
+    md += fmt::format(" {:.3f} ({:.0f}) |", t, t > 0 ? 1e3 / t : 0.0);
+  md +=
+      "\n\nThe model is a lower bound: it ignores launch overheads (tens of microseconds per "
+      "kernel), gathers that waste cache-line bytes, and the host's share of a frame. A view "
+      "change's light side (the newly visible vertices' relight) is not in it.\n";
+  return md;
+}
+
+nlohmann::json cost_model_json(const std::vector<StageCost>& view,
+                               const std::vector<StageCost>& light) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& [change, costs] : {std::pair{"view", &view}, std::pair{"light", &light}})
+    for (const StageCost& c : *costs) {
+      nlohmann::json models = nlohmann::json::object();
+      for (const auto& d : model_devices()) models[d.name] = model_ms(c, d);
+      j.push_back({{"change", change},
+                   {"stage", c.stage},
+                   {"bytes", c.bytes},
+                   {"flops", c.flops},
+                   {"upload", c.upload},
+                   {"measured_ms", c.measured_ms},
+                   {"model_ms", models}});
+    }
+  return j;
 }
 
 // Whether the frames ran the cached shading kernels (DeviceBtfShader::uses_view_cache).
@@ -394,10 +556,6 @@ bool view_cache_used(const FrameRenderer& r) {
 // How many light-change frames a view-change frame costs (0 when a light frame took no time).
 double view_to_light_ratio(const LoopResult& view, const LoopResult& light) {
   return light.median_frame_ms > 0 ? view.median_frame_ms / light.median_frame_ms : 0.0;
-}
-
-std::string fmt_ms(double v) {
-  return fmt::format("{:.2f}", v);
 }
 
 // /proc/loadavg's three averages, read when the timed loops start ("" where unavailable):
@@ -463,10 +621,12 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       "Medians over the frames. A frame is the sum of the stages it runs (wall clock, the "
       "device waited for); the image stays on the device (no read-back). Each stage's median "
       "is taken separately.\n\n";
-  md += "| | view change | light change | paper, Table I (2008, GTX 280) |\n|---|---:|---:|---:|\n";
+  md += fmt::format(
+      "| | view change | light change | paper, {} (2008, GTX 280) |\n|---|---:|---:|---:|\n",
+      paper ? paper->table : std::string("Table I"));
   md += fmt::format(
       "| **fps** | **{:.1f}** | **{:.1f}** | {} |\n", view.fps, light.fps,
-      paper ? fmt::format("{:.1f} / {:.1f}", paper->first, paper->second) : std::string("—"));
+      paper ? fmt::format("{:.1f} / {:.1f}", paper->view, paper->light) : std::string("—"));
   md += fmt::format("| frame ms | {} | {} | |\n", fmt_ms(view.median_frame_ms),
                     fmt_ms(light.median_frame_ms));
   md += fmt::format("| view / light frame time | {:.2f} | | |\n", view_to_light_ratio(view, light));
@@ -493,6 +653,10 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       p.setup_seconds, p.transfer_cache_hit ? "from cache" : "computed",
       p.compress_cache_hit ? "from cache" : "computed", p.btf_cache_hits,
       p.materials.part_material.size());
+  const double m = p.materials.part_material.front()->light_basis().dim;
+  const FrameCosts costs = frame_costs(p);
+  md += cost_model_markdown(view_change_costs(r, costs, view, m),
+                            light_change_costs(r, costs, light, m));
   return md;
 }
 
@@ -577,9 +741,15 @@ void run_fps(const FpsCli& o) {
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);
   j["view_to_light_frame_ratio"] = view_to_light_ratio(view, light);
-  j["paper"] = paper ? nlohmann::json{{"table", "Table I"},
-                                      {"view_fps", paper->first},
-                                      {"light_fps", paper->second},
+  {
+    const double m = p.materials.part_material.front()->light_basis().dim;
+    const FrameCosts costs = frame_costs(p);
+    j["cost_model"] = cost_model_json(view_change_costs(r, costs, view, m),
+                                      light_change_costs(r, costs, light, m));
+  }
+  j["paper"] = paper ? nlohmann::json{{"table", paper->table},
+                                      {"view_fps", paper->view},
+                                      {"light_fps", paper->light},
                                       {"hardware", "2008 quad Xeon + GTX 280"}}
                      : nlohmann::json(nullptr);
   j["setup_seconds"] = p.setup_seconds;
@@ -617,8 +787,8 @@ void run_fps(const FpsCli& o) {
       light.fps, light.median_frame_ms, light.stages.project_ms, light.stages.relight_ms,
       light.stages.upload_ms, light.stages.shade_ms);
   if (paper)
-    std::printf("paper        %.1f / %.1f fps (Table I, 2008 GTX 280)\n", paper->first,
-                paper->second);
+    std::printf("paper        %.1f / %.1f fps (%s, 2008 GTX 280)\n", paper->view, paper->light,
+                paper->table.c_str());
   if (!o.out.empty()) std::printf("wrote        %s (+ .json)\n", o.out.c_str());
 }
 

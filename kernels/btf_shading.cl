@@ -13,13 +13,19 @@
 //   btf_view_cache    one work-item per hit pixel ("slot"): b(u, e, .), stored
 //   btf_shade_cached  one work-item per pixel: the dot product of the cached b(u, e) with the
 //                     interpolated L*
+//   btf_view_cache_shade  one work-item per hit pixel: b(u, e, .) stored as btf_view_cache does
+//                     and, in the same pass, its dot product with L* written to the slot's pixel
+//                     (a view change: the cache is not read back)
+//   btf_shade_misses  one work-item per pixel: misses copy their background pixel, hits are left
+//                     to btf_view_cache_shade
 //
 // Data (all packed float RGB, no padding):
 //   radiance   L*, vertex * 3M + 3 j + c
 //   cache      b(u, e), slot * 3M + 3 j + c
 //   code       per pixel: slot >= 0 for a hit, -(1 + k) for a miss showing background pixel k
 //              (the host appends a black pixel for "no background")
-//   slot_ids   (triangle, part); slot_geom (b1, b2, u, v); slot_view (e.t, e.b, e.n, 0)
+//   slot_ids   (triangle, part); slot_geom (b1, b2, u, v); slot_view (e.t, e.b, e.n, 0);
+//              slot_pixel the pixel of each slot
 //
 // Vector loop: the 3M floats of b(u, e) and of L* are walked 12 at a time (4 lights, 3 float4
 // loads, no padding); products accumulate in three float4s whose lanes hold the channels in the
@@ -30,6 +36,15 @@
 float3 prt_channels(float4 a0, float4 a1, float4 a2) {
   return (float3)(a0.x + a0.w + a1.z + a2.y, a0.y + a1.x + a1.w + a2.z, a0.z + a1.y + a2.x + a2.w);
 }
+
+// The L* rows l0, l1, l2 of triangle `tri`'s vertices and their weights w0, w1, w2 (from the
+// slot's (b1, b2, u, v)), which PRT_LSTAR4 and PRT_LSTAR1 read.
+#define PRT_TRIANGLE_LSTAR(tri, geom)                             \
+  const uint3 v = vload3((uint)(tri), indices);                   \
+  __global const float* l0 = radiance + (ulong)v.x * PRT_CH;      \
+  __global const float* l1 = radiance + (ulong)v.y * PRT_CH;      \
+  __global const float* l2 = radiance + (ulong)v.z * PRT_CH;      \
+  const float w1 = (geom).x, w2 = (geom).y, w0 = 1.0f - w1 - w2
 
 // L*(x) for 12 floats: the triangle's three vertex vectors weighted by the barycentrics.
 #define PRT_LSTAR4(k) \
@@ -53,11 +68,7 @@ __kernel PRT_WG_ATTR void btf_shade_single(
   }
   const int2 ids = slot_ids[s];
   const float4 geom = slot_geom[s];
-  const uint3 v = vload3((uint)ids.x, indices);
-  __global const float* l0 = radiance + (ulong)v.x * PRT_CH;
-  __global const float* l1 = radiance + (ulong)v.y * PRT_CH;
-  __global const float* l2 = radiance + (ulong)v.z * PRT_CH;
-  const float w1 = geom.x, w2 = geom.y, w0 = 1.0f - w1 - w2;
+  PRT_TRIANGLE_LSTAR(ids.x, geom);
 
   prt_material mat;
   prt_material_begin(&mat, ids.y, geom.zw, slot_view[s].xyz PRT_MATERIAL_ARGS);
@@ -110,11 +121,7 @@ __kernel PRT_WG_ATTR void btf_shade_cached(
     return;
   }
   const float4 geom = slot_geom[s];
-  const uint3 v = vload3((uint)slot_ids[s].x, indices);
-  __global const float* l0 = radiance + (ulong)v.x * PRT_CH;
-  __global const float* l1 = radiance + (ulong)v.y * PRT_CH;
-  __global const float* l2 = radiance + (ulong)v.z * PRT_CH;
-  const float w1 = geom.x, w2 = geom.y, w0 = 1.0f - w1 - w2;
+  PRT_TRIANGLE_LSTAR(slot_ids[s].x, geom);
   __global const float* b = cache + (ulong)s * PRT_CH;
   float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f);
   for (int c = 0; c < PRT_CH12; c += 12) {
@@ -127,4 +134,51 @@ __kernel PRT_WG_ATTR void btf_shade_cached(
   for (int c = PRT_CH12; c < PRT_CH; ++c) tail[c % 3] += b[c] * PRT_LSTAR1;
   rgb += (float3)(tail[0], tail[1], tail[2]);
   vstore3(rgb, i, image);
+}
+
+// The first argument after `cache` is the material's (kViewCacheShadeMaterialArg). The dot
+// product is btf_shade_cached's, on the values it would read back from `cache`, in its order.
+__kernel PRT_WG_ATTR void btf_view_cache_shade(
+    const uint slots, __global const int2* restrict slot_ids,
+    __global const float4* restrict slot_geom, __global const float4* restrict slot_view,
+    __global const uint* restrict slot_pixel, __global const uint* restrict indices,
+    __global const float* restrict radiance, __global float* restrict image,
+    __global float* restrict cache PRT_MATERIAL_PARAMS) {
+  const uint s = get_global_id(0);
+  PRT_GUARD(s, slots);
+  const int2 ids = slot_ids[s];
+  const float4 geom = slot_geom[s];
+  prt_material mat;
+  prt_material_begin(&mat, ids.y, geom.zw, slot_view[s].xyz PRT_MATERIAL_ARGS);
+  PRT_TRIANGLE_LSTAR(ids.x, geom);
+  __global float* out = cache + (ulong)s * PRT_CH;
+  float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f);
+  for (int c = 0; c < PRT_CH12; c += 12) {
+    float4 b0, b1, b2;
+    prt_material_chunk(&mat, c, &b0, &b1, &b2 PRT_MATERIAL_ARGS);
+    vstore4(b0, 0, out + c);
+    vstore4(b1, 1, out + c);
+    vstore4(b2, 2, out + c);
+    a0 += b0 * PRT_LSTAR4(0);
+    a1 += b1 * PRT_LSTAR4(1);
+    a2 += b2 * PRT_LSTAR4(2);
+  }
+  float3 rgb = prt_channels(a0, a1, a2);
+  float tail[3] = {0.0f, 0.0f, 0.0f};
+  for (int c = PRT_CH12; c < PRT_CH; ++c) {
+    const float b = prt_material_one(&mat, c PRT_MATERIAL_ARGS);
+    out[c] = b;
+    tail[c % 3] += b * PRT_LSTAR1;
+  }
+  rgb += (float3)(tail[0], tail[1], tail[2]);
+  vstore3(rgb, slot_pixel[s], image);
+}
+
+__kernel PRT_WG_ATTR void btf_shade_misses(const uint pixels, __global const int* restrict code,
+                                           __global const float* restrict background,
+                                           __global float* restrict image) {
+  const uint i = get_global_id(0);
+  PRT_GUARD(i, pixels);
+  const int s = code[i];
+  if (s < 0) vstore3(vload3((uint)(-(s + 1)), background), i, image);
 }

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "prtlab/btf/btf_generator.h"
@@ -221,6 +222,32 @@ TEST(BtfShading, CachedAndSinglePassAgree) {
   const std::uint64_t vec = 16 * 3 * 4;
   EXPECT_EQ(a.bytes_read_per_frame(), s.front.hit_count() * (4 + 3) * vec);
   EXPECT_EQ(a.bytes_per_pass().cached_shade, s.front.hit_count() * (1 + 3) * vec);
+}
+
+// The first pass after a new G-buffer shades the hits while it builds the cache
+// (btf_view_cache_shade); the next reads the cache back (btf_shade_cached). Same values, same
+// order: the two images are bit-identical, for both filters and an odd light grid's tail.
+TEST(BtfShading, ViewCacheBuildingPassEqualsTheCachedPassBitwise) {
+  PRT_REQUIRE_OPENCL();
+  const auto& s = tiny();
+  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
+    ShadingOptions o;
+    o.filter = filter;
+    DeviceBtfShader sh(*context(), s.scene.mesh, s.materials, &s.background, o);
+    sh.set_gbuffer(s.front);
+    sh.set_radiance(s.radiance);
+    sh.shade();
+    ASSERT_GT(sh.last_view_cache_ms(), 0.0);
+    const RgbImage first = sh.read_image();
+    sh.shade();
+    EXPECT_EQ(sh.last_view_cache_ms(), 0.0);
+    const RgbImage second = sh.read_image();
+    ASSERT_EQ(first.pixels.size(), second.pixels.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < first.pixels.size(); ++i)
+      differ += std::memcmp(&first.pixels[i], &second.pixels[i], sizeof(Rgb)) != 0 ? 1 : 0;
+    EXPECT_EQ(differ, 0u) << (filter == TexelFilter::kNearest ? "nearest" : "bilinear");
+  }
 }
 
 // An odd light grid (S = 5, M = 25: 75 floats per vector, 72 in 12-float chunks and a tail of

@@ -200,6 +200,64 @@ TEST(GBuffer, PartsAndDeterminism) {
   EXPECT_GT(parts[1], 100);
 }
 
+// The packet tracer (the default) against one rtcIntersect1 per pixel: the same triangle at
+// every pixel, barycentrics and depths to float rounding, the same frames. Cameras: the mesh
+// small in the image (most pixels outside its window), partly outside the image, the eye
+// inside the bounding box (no window), and a non-multiple-of-4 image size.
+TEST(GBuffer, PacketsEqualSingleRays) {
+  Mesh left = make_sphere(0.5, 40, 20), right = make_box(Vec3d(0.4), 2);
+  Transform xf;
+  xf.translate = {-0.7, 0, 0};
+  apply_transform(left, xf);
+  xf.translate = {0.7, 0.2, 0};
+  apply_transform(right, xf);
+  Mesh scene;
+  scene.append(left, 0);
+  scene.append(right, 1);
+  const GBufferTracer tracer(scene);
+  std::vector<Camera> cams(4);
+  cams[0].eye = {0, 0, 7};
+  cams[0].width = 203;
+  cams[0].height = 97;
+  cams[1].eye = {2.5, 0.5, 2};
+  cams[1].target = {1.5, 0, 0};
+  cams[2].eye = {0.2, 0.1, 0.1};  // inside the box of the union: every pixel traced
+  cams[2].target = {-0.7, 0, 0};
+  cams[2].fov_y_deg = 100;
+  cams[3].eye = {0.3, 3, 3};
+  cams[3].width = 64;
+  cams[3].height = 48;
+  GBuffer reused;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    const GBuffer a = tracer.trace(cams[c], PrimaryRays::kSingle);
+    tracer.trace(cams[c], reused, PrimaryRays::kPackets);
+    const GBuffer& b = reused;
+    ASSERT_EQ(a.pixel_count(), b.pixel_count());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < a.pixel_count(); ++i) {
+      ASSERT_EQ(a.triangle[i], b.triangle[i]) << "camera " << c << " pixel " << i;
+      EXPECT_EQ(a.part[i], b.part[i]);
+      for (int k = 0; k < 4; ++k) EXPECT_EQ(a.direction[4 * i + k], b.direction[4 * i + k]);
+      if (a.triangle[i] < 0) {
+        EXPECT_TRUE(std::isinf(b.depth[i]));
+        continue;
+      }
+      ++hits;
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_NEAR(a.bary[2 * i + k], b.bary[2 * i + k], 1e-6f) << c << " " << i;
+        EXPECT_NEAR(a.uv[2 * i + k], b.uv[2 * i + k], 1e-5f) << c << " " << i;
+      }
+      EXPECT_NEAR(a.depth[i], b.depth[i], 1e-6f * a.depth[i]);
+      for (int k = 0; k < 4; ++k) {
+        EXPECT_NEAR(a.view_local[4 * i + k], b.view_local[4 * i + k], 1e-5f) << c << " " << i;
+        EXPECT_NEAR(a.normal[4 * i + k], b.normal[4 * i + k], 1e-5f) << c << " " << i;
+      }
+    }
+    EXPECT_GT(hits, a.pixel_count() / 100) << "camera " << c;
+    EXPECT_LT(hits, a.pixel_count()) << "camera " << c;
+  }
+}
+
 TEST(GBuffer, DebugImages) {
   const SphereView s;
   const RgbImage n = gbuffer_image(s.g, GBufferView::kNormal);

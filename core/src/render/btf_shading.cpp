@@ -119,9 +119,9 @@ struct DeviceBtfShader::Impl {
   MaterialLightBasis basis;
   std::unique_ptr<DeviceMaterial> material;
   std::vector<std::uint64_t> part_material_bytes;  // material bytes a hit pixel of each part reads
-  cl::Kernel single, view_cache, cached;
+  cl::Kernel single, view_cache, cached, view_cache_shade, misses;
   cl::Buffer indices;
-  cl::Buffer code, slot_ids, slot_geom, slot_view, radiance, cache, background, image;
+  cl::Buffer code, slot_ids, slot_geom, slot_view, slot_pixel, radiance, cache, background, image;
   // The buffer the kernels read L* from: `radiance` (uploaded by set_radiance) or a
   // relighter's output buffer (set_radiance_buffer).
   cl::Buffer radiance_source;
@@ -135,6 +135,10 @@ struct DeviceBtfShader::Impl {
   std::vector<std::int32_t> codes;
   std::vector<std::uint32_t> miss_pixels;
   std::vector<Vec3> miss_directions;
+  // The hit slots as uploaded (kept between view changes: no allocation per frame).
+  std::vector<cl_int2> slot_id_host;
+  std::vector<cl_float4> slot_geom_host, slot_view_host;
+  std::vector<cl_uint> slot_pixel_host;
   std::optional<CubemapLayout> background_layout;  // of the uploaded background, if any
   int background_pixels = 0;                       // its N (0: none; index N is black)
   bool have_gbuffer = false, have_radiance = false, cache_valid = false;
@@ -175,6 +179,9 @@ DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
   s.cached = make_kernel(program, "btf_shade_cached");
   s.material->set_args(s.single, kSingleMaterialArg);
   s.material->set_args(s.view_cache, kViewCacheMaterialArg);
+  s.view_cache_shade = make_kernel(program, "btf_view_cache_shade");
+  s.misses = make_kernel(program, "btf_shade_misses");
+  s.material->set_args(s.view_cache_shade, kViewCacheShadeMaterialArg);
   for (std::size_t p = 0; p < s.parts; ++p) {
     s.part_material_bytes.push_back(s.material->bytes_per_hit(p, options.filter));
     s.use_cache = s.use_cache || s.material->view_cache_useful(p, options.filter);
@@ -228,35 +235,59 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
   s.codes.resize(s.pixels);
   s.miss_pixels.clear();
   s.miss_directions.clear();
-  std::vector<cl_int2> ids;
-  std::vector<cl_float4> geom, view;
-  const std::size_t expected = std::min(s.pixels, s.slots + s.slots / 4 + 64);
-  ids.reserve(expected);
-  geom.reserve(expected);
-  view.reserve(expected);
-  s.miss_pixels.reserve(s.pixels - std::min(s.pixels, s.slots));
-  s.miss_directions.reserve(s.pixels - std::min(s.pixels, s.slots));
-  s.material_bytes_per_frame = 0;
-  for (std::size_t i = 0; i < s.pixels; ++i) {
-    const std::int32_t tri = g.triangle[i];
-    if (tri < 0) {
-      s.miss_pixels.push_back(static_cast<std::uint32_t>(i));
-      s.miss_directions.emplace_back(g.direction[4 * i], g.direction[4 * i + 1],
-                                     g.direction[4 * i + 2]);
-      continue;
+  // Two parallel passes over rows: count each row's hits, then (from the prefix sums) write the
+  // slots, the codes and the misses in pixel order, as a serial scan would.
+  const std::size_t rows = static_cast<std::size_t>(g.height),
+                    w = static_cast<std::size_t>(g.width);
+  std::vector<std::size_t> row_start(rows + 1, 0), row_bytes(rows, 0);
+  tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t y) {
+    std::size_t hits = 0;
+    for (std::size_t i = y * w; i < (y + 1) * w; ++i) hits += g.triangle[i] >= 0 ? 1 : 0;
+    row_start[y + 1] = hits;
+  });
+  for (std::size_t y = 0; y < rows; ++y) row_start[y + 1] += row_start[y];
+  s.slots = row_start[rows];
+  s.slot_id_host.resize(s.slots);
+  s.slot_geom_host.resize(s.slots);
+  s.slot_view_host.resize(s.slots);
+  s.slot_pixel_host.resize(s.slots);
+  s.miss_pixels.resize(s.pixels - s.slots);
+  s.miss_directions.resize(s.pixels - s.slots);
+  const int black = s.background_pixels;
+  const CubemapLayout* layout = s.background_layout ? &*s.background_layout : nullptr;
+  tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t y) {
+    std::size_t slot = row_start[y], miss = y * w - row_start[y];
+    std::uint64_t bytes = 0;
+    for (std::size_t i = y * w; i < (y + 1) * w; ++i) {
+      const std::int32_t tri = g.triangle[i];
+      if (tri < 0) {
+        s.miss_pixels[miss] = static_cast<std::uint32_t>(i);
+        s.miss_directions[miss] =
+            Vec3(g.direction[4 * i], g.direction[4 * i + 1], g.direction[4 * i + 2]);
+        s.codes[i] = -(1 + background_pixel(&g.direction[4 * i], layout, black));
+        ++miss;
+        continue;
+      }
+      const std::int32_t part = g.part[i];
+      PRT_CHECK(part >= 0 && static_cast<std::size_t>(part) < s.parts,
+                "G-buffer pixel {} has part {}, {} BTFs given", i, part, s.parts);
+      s.codes[i] = static_cast<std::int32_t>(slot);
+      s.slot_id_host[slot] = cl_int2{{tri, part}};
+      s.slot_geom_host[slot] =
+          cl_float4{{g.bary[2 * i], g.bary[2 * i + 1], g.uv[2 * i], g.uv[2 * i + 1]}};
+      s.slot_pixel_host[slot] = static_cast<cl_uint>(i);
+      s.slot_view_host[slot] =
+          cl_float4{{g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2], 0.0f}};
+      bytes += s.part_material_bytes[static_cast<std::size_t>(part)];
+      ++slot;
     }
-    const std::int32_t part = g.part[i];
-    PRT_CHECK(part >= 0 && static_cast<std::size_t>(part) < s.parts,
-              "G-buffer pixel {} has part {}, {} BTFs given", i, part, s.parts);
-    s.codes[i] = static_cast<std::int32_t>(ids.size());
-    ids.push_back(cl_int2{{tri, part}});
-    geom.push_back(cl_float4{{g.bary[2 * i], g.bary[2 * i + 1], g.uv[2 * i], g.uv[2 * i + 1]}});
-    view.push_back(
-        cl_float4{{g.view_local[4 * i], g.view_local[4 * i + 1], g.view_local[4 * i + 2], 0.0f}});
-    s.material_bytes_per_frame += s.part_material_bytes[static_cast<std::size_t>(part)];
-  }
-  s.slots = ids.size();
-  s.compute_miss_codes();
+    row_bytes[y] = bytes;
+  });
+  s.material_bytes_per_frame = 0;
+  for (const std::uint64_t b : row_bytes) s.material_bytes_per_frame += b;
+  const auto& ids = s.slot_id_host;
+  const auto& geom = s.slot_geom_host;
+  const auto& view = s.slot_view_host;
 
   if (s.pixels > s.pixel_capacity) {
     s.code = make_buffer(s.ctx, s.pixels * sizeof(std::int32_t), CL_MEM_READ_ONLY,
@@ -272,6 +303,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
     s.slot_ids = make_buffer(s.ctx, n * sizeof(cl_int2), CL_MEM_READ_ONLY, "shading slots");
     s.slot_geom = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
     s.slot_view = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
+    s.slot_pixel = make_buffer(s.ctx, n * sizeof(cl_uint), CL_MEM_READ_ONLY, "shading slots");
     s.slot_capacity = n;
   }
   write_buffer(s.ctx, s.code, s.codes.data(), s.pixels * sizeof(std::int32_t),
@@ -280,6 +312,8 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
     write_buffer(s.ctx, s.slot_ids, ids.data(), s.slots * sizeof(cl_int2), "shading slots");
     write_buffer(s.ctx, s.slot_geom, geom.data(), s.slots * sizeof(cl_float4), "shading slots");
     write_buffer(s.ctx, s.slot_view, view.data(), s.slots * sizeof(cl_float4), "shading slots");
+    write_buffer(s.ctx, s.slot_pixel, s.slot_pixel_host.data(), s.slots * sizeof(cl_uint),
+                 "shading slots");
   }
   if (s.use_cache && s.slots > s.cache_capacity) {
     s.cache = cl::Buffer();  // release the old one before allocating the larger one
@@ -327,18 +361,24 @@ double DeviceBtfShader::shade() {
     return event_ms(s.ctx, ev, "btf_shade_single");
   }
   if (!s.cache_valid && s.slots > 0) {
-    set_args(s.view_cache, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom, s.slot_view,
-             s.cache);
-    cl::Event ev =
-        launch(s.ctx, "btf_view_cache", s.view_cache, LaunchRange::linear(s.slots, kWorkGroup));
-    s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache");
+    // A new G-buffer: build the cache and shade the hits in one pass, then the misses.
+    set_args(s.view_cache_shade, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom,
+             s.slot_view, s.slot_pixel, s.indices, s.radiance_source, s.image, s.cache);
+    cl::Event ev = launch(s.ctx, "btf_view_cache_shade", s.view_cache_shade,
+                          LaunchRange::linear(s.slots, kWorkGroup));
+    s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache_shade");
+    s.cache_valid = true;
+    set_args(s.misses, pixels, s.code, s.background, s.image);
+    cl::Event ev2 =
+        launch(s.ctx, "btf_shade_misses", s.misses, LaunchRange::linear(s.pixels, kWorkGroup));
+    return s.last_cache_ms + event_ms(s.ctx, ev2, "btf_shade_misses");
   }
   s.cache_valid = true;
   set_args(s.cached, pixels, s.code, s.slot_ids, s.slot_geom, s.indices, s.radiance_source,
            s.slots > 0 ? s.cache : s.slot_geom, s.background, s.image);
   cl::Event ev =
       launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.pixels, kWorkGroup));
-  return s.last_cache_ms + event_ms(s.ctx, ev, "btf_shade_cached");
+  return event_ms(s.ctx, ev, "btf_shade_cached");
 }
 
 bool DeviceBtfShader::uses_view_cache() const {

@@ -29,6 +29,7 @@ struct FrameRenderer::Impl {
   ClContext* context = nullptr;
   ShadingOptions options;
   GBufferTracer tracer;
+  PrimaryRays primary_rays = PrimaryRays::kPackets;
   std::unique_ptr<DeviceRelighter> relighter;
   std::optional<DeviceBtfShader> shader;
   // How L* reaches the materials (shading_light_path). kToPixelBins: a backend relighting into
@@ -189,7 +190,7 @@ FrameRenderer& FrameRenderer::operator=(FrameRenderer&&) noexcept = default;
 void FrameRenderer::set_camera(const Camera& camera) {
   Impl& s = *impl_;
   auto t0 = Clock::now();
-  s.gbuffer = s.tracer.trace(camera);
+  s.tracer.trace(camera, s.gbuffer, s.primary_rays);
   s.pending.gbuffer_ms += ms_since(t0);
   if (s.shader) {
     t0 = Clock::now();
@@ -252,6 +253,10 @@ void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* b
     s.pending.upload_ms += ms_since(t0);
   }
   ++s.counters.relights;
+}
+
+void FrameRenderer::set_primary_rays(PrimaryRays rays) {
+  impl_->primary_rays = rays;
 }
 
 void FrameRenderer::set_culling(bool on) {

@@ -55,6 +55,7 @@ struct GBufferTracer::Impl {
   std::vector<std::uint16_t> triangle_part;
   std::vector<Vec2> uvs;
   std::vector<Vec3d> frame_t, frame_n;  // Mesh::frame of every vertex (b = n x t)
+  Aabb bounds;
 };
 
 GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()) {
@@ -77,6 +78,7 @@ GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()
     im.frame_n[v] = f.n;
   }
 
+  im.bounds = mesh->bounds();
   im.embree.emplace(mesh->positions, mesh->indices);
   im.scene = im.embree->scene();
 }
@@ -85,80 +87,198 @@ GBufferTracer::~GBufferTracer() = default;
 GBufferTracer::GBufferTracer(GBufferTracer&&) noexcept = default;
 GBufferTracer& GBufferTracer::operator=(GBufferTracer&&) noexcept = default;
 
-GBuffer GBufferTracer::trace(const Camera& camera) const {
+GBuffer GBufferTracer::trace(const Camera& camera, PrimaryRays rays) const {
+  GBuffer g;
+  trace(camera, g, rays);
+  return g;
+}
+
+namespace {
+
+// Pixel columns [x0, x1) and rows [y0, y1) outside which no primary ray can meet the mesh's
+// bounding box: the box's corners projected to the image plane, widened by two pixels so that
+// rounding the ray direction to float cannot reach past it. The whole image when a corner
+// lies at or behind the eye's plane (the projection is then unbounded).
+struct PixelWindow {
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+};
+
+PixelWindow mesh_window(const Aabb& box, const Camera& camera, const CameraBasis& basis,
+                        double sx_scale, double sy_scale) {
+  PixelWindow all{0, camera.width, 0, camera.height};
+  double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d p((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,
+                  (c & 4) ? box.hi.z : box.lo.z);
+    const Vec3d q = p - camera.eye;
+    const double z = glm::dot(q, basis.forward);
+    if (!(z > 1e-9 * (1.0 + glm::length(q)))) return all;
+    const double sx = glm::dot(q, basis.right) / z / sx_scale;
+    const double sy = glm::dot(q, basis.up) / z / sy_scale;
+    lo_x = std::min(lo_x, sx);
+    hi_x = std::max(hi_x, sx);
+    lo_y = std::min(lo_y, sy);
+    hi_y = std::max(hi_y, sy);
+  }
+  // Pixel x's ray has sx = 2 (x + 0.5) / W - 1; row y's has sy = 1 - 2 (y + 0.5) / H.
+  const auto clamp_to = [](double v, int n) {
+    return static_cast<int>(std::clamp(v, 0.0, static_cast<double>(n)));
+  };
+  PixelWindow w;
+  w.x0 = clamp_to(std::floor((lo_x + 1.0) * 0.5 * camera.width - 0.5) - 2, camera.width);
+  w.x1 = clamp_to(std::ceil((hi_x + 1.0) * 0.5 * camera.width - 0.5) + 3, camera.width);
+  w.y0 = clamp_to(std::floor((1.0 - hi_y) * 0.5 * camera.height - 0.5) - 2, camera.height);
+  w.y1 = clamp_to(std::ceil((1.0 - lo_y) * 0.5 * camera.height - 0.5) + 3, camera.height);
+  if (w.x0 >= w.x1 || w.y0 >= w.y1) w = PixelWindow{};
+  return w;
+}
+
+// A pixel's miss values. A reused G-buffer's pixel that missed before already holds them (reset()
+// or an earlier trace wrote them), so only previous hits are cleared.
+void set_miss(GBuffer& g, std::size_t i) {
+  if (g.triangle[i] < 0) return;
+  g.triangle[i] = -1;
+  g.part[i] = -1;
+  g.bary[2 * i] = g.bary[2 * i + 1] = 0.f;
+  g.uv[2 * i] = g.uv[2 * i + 1] = 0.f;
+  for (int k = 0; k < 4; ++k) g.view_local[4 * i + k] = g.normal[4 * i + k] = 0.f;
+  g.depth[i] = kInf;
+}
+
+}  // namespace
+
+void GBufferTracer::trace(const Camera& camera, GBuffer& g, PrimaryRays rays) const {
   const CameraBasis basis = camera.basis();
   const Impl& im = *impl_;
-  GBuffer g;
-  g.reset(camera.width, camera.height);
+  if (g.width != camera.width || g.height != camera.height || g.triangle.size() != g.pixel_count())
+    g.reset(camera.width, camera.height);
   g.eye = camera.eye;
   const double sx_scale = basis.tan_half_fov_y * basis.aspect;
   const double sy_scale = basis.tan_half_fov_y;
   const float ox = static_cast<float>(camera.eye.x), oy = static_cast<float>(camera.eye.y),
               oz = static_cast<float>(camera.eye.z);
+  const PixelWindow window = mesh_window(im.bounds, camera, basis, sx_scale, sy_scale);
 
-  tbb::parallel_for(
-      tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
-      [&](const tbb::blocked_range2d<int>& r) {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // one origin, neighbouring rays
-        for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
-          const double sy = (1.0 - 2.0 * (y + 0.5) / camera.height) * sy_scale;
-          for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-            const double sx = (2.0 * (x + 0.5) / camera.width - 1.0) * sx_scale;
-            const Vec3d d = glm::normalize(basis.forward + sx * basis.right + sy * basis.up);
-            const std::size_t i = g.index(x, y);
-            put4(g.direction, i, d);
+  const auto direction = [&](int x, int y) {
+    const double sy = (1.0 - 2.0 * (y + 0.5) / camera.height) * sy_scale;
+    const double sx = (2.0 * (x + 0.5) / camera.width - 1.0) * sx_scale;
+    return glm::normalize(basis.forward + sx * basis.right + sy * basis.up);
+  };
+  // The hit's fields from Embree's (primID, u, v, t); ray direction d.
+  const auto store_hit = [&](std::size_t i, const Vec3d& d, std::uint32_t tri, float u, float v,
+                             float t) {
+    const std::uint32_t* vi = &im.indices[3 * static_cast<std::size_t>(tri)];
+    const double b1 = u, b2 = v, b0 = 1.0 - b1 - b2;
+    g.triangle[i] = static_cast<std::int32_t>(tri);
+    g.part[i] = im.triangle_part.empty() ? 0 : im.triangle_part[tri];
+    g.bary[2 * i + 0] = u;
+    g.bary[2 * i + 1] = v;
+    g.depth[i] = t;
+    if (!im.uvs.empty()) {
+      const Vec2 uv = static_cast<float>(b0) * im.uvs[vi[0]] +
+                      static_cast<float>(b1) * im.uvs[vi[1]] +
+                      static_cast<float>(b2) * im.uvs[vi[2]];
+      g.uv[2 * i + 0] = uv.x;
+      g.uv[2 * i + 1] = uv.y;
+    } else {
+      g.uv[2 * i] = g.uv[2 * i + 1] = 0.f;
+    }
+    Vec3d n = b0 * im.frame_n[vi[0]] + b1 * im.frame_n[vi[1]] + b2 * im.frame_n[vi[2]];
+    const double nl = glm::length(n);
+    // Opposite vertex normals can cancel (a knife edge); the face normal stands in.
+    if (!(nl > 1e-12)) {
+      n = glm::cross(im.frame_n[vi[1]] - im.frame_n[vi[0]], im.frame_n[vi[2]] - im.frame_n[vi[0]]);
+      n = glm::length(n) > 0 ? glm::normalize(n) : -d;
+    } else {
+      n /= nl;
+    }
+    const Vec3d t_sum = b0 * im.frame_t[vi[0]] + b1 * im.frame_t[vi[1]] + b2 * im.frame_t[vi[2]];
+    const LocalFrame f = LocalFrame::from_normal_tangent(n, t_sum);
+    put4(g.normal, i, f.n);
+    put4(g.view_local, i, f.to_local(-d));
+  };
 
-            RTCRayHit rh{};
-            rh.ray.org_x = ox;
-            rh.ray.org_y = oy;
-            rh.ray.org_z = oz;
-            rh.ray.dir_x = static_cast<float>(d.x);
-            rh.ray.dir_y = static_cast<float>(d.y);
-            rh.ray.dir_z = static_cast<float>(d.z);
-            rh.ray.tnear = 0.f;
-            rh.ray.tfar = kInf;
-            rh.ray.mask = ~0u;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(im.scene, &context, &rh);
-            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-
-            const std::uint32_t tri = rh.hit.primID;
-            const std::uint32_t* v = &im.indices[3 * static_cast<std::size_t>(tri)];
-            const double b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0 - b1 - b2;
-            g.triangle[i] = static_cast<std::int32_t>(tri);
-            g.part[i] = im.triangle_part.empty() ? 0 : im.triangle_part[tri];
-            g.bary[2 * i + 0] = rh.hit.u;
-            g.bary[2 * i + 1] = rh.hit.v;
-            g.depth[i] = rh.ray.tfar;
-            if (!im.uvs.empty()) {
-              const Vec2 uv = static_cast<float>(b0) * im.uvs[v[0]] +
-                              static_cast<float>(b1) * im.uvs[v[1]] +
-                              static_cast<float>(b2) * im.uvs[v[2]];
-              g.uv[2 * i + 0] = uv.x;
-              g.uv[2 * i + 1] = uv.y;
-            }
-            Vec3d n = b0 * im.frame_n[v[0]] + b1 * im.frame_n[v[1]] + b2 * im.frame_n[v[2]];
-            const double nl = glm::length(n);
-            // Opposite vertex normals can cancel (a knife edge); the face normal stands in.
-            if (!(nl > 1e-12)) {
-              n = glm::cross(im.frame_n[v[1]] - im.frame_n[v[0]],
-                             im.frame_n[v[2]] - im.frame_n[v[0]]);
-              n = glm::length(n) > 0 ? glm::normalize(n) : -d;
-            } else {
-              n /= nl;
-            }
-            const Vec3d t_sum =
-                b0 * im.frame_t[v[0]] + b1 * im.frame_t[v[1]] + b2 * im.frame_t[v[2]];
-            const LocalFrame f = LocalFrame::from_normal_tangent(n, t_sum);
-            put4(g.normal, i, f.n);
-            put4(g.view_local, i, f.to_local(-d));
-          }
-        }
-      });
-  return g;
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
+                    [&](const tbb::blocked_range2d<int>& r) {
+                      RTCIntersectContext context;
+                      rtcInitIntersectContext(&context);
+                      context.flags =
+                          RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // one origin, neighbouring rays
+                      if (rays == PrimaryRays::kSingle) {
+                        for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
+                          for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+                            const Vec3d d = direction(x, y);
+                            const std::size_t i = g.index(x, y);
+                            put4(g.direction, i, d);
+                            RTCRayHit rh{};
+                            rh.ray.org_x = ox;
+                            rh.ray.org_y = oy;
+                            rh.ray.org_z = oz;
+                            rh.ray.dir_x = static_cast<float>(d.x);
+                            rh.ray.dir_y = static_cast<float>(d.y);
+                            rh.ray.dir_z = static_cast<float>(d.z);
+                            rh.ray.tnear = 0.f;
+                            rh.ray.tfar = kInf;
+                            rh.ray.mask = ~0u;
+                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                            rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+                            rtcIntersect1(im.scene, &context, &rh);
+                            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+                              set_miss(g, i);
+                            else
+                              store_hit(i, d, rh.hit.primID, rh.hit.u, rh.hit.v, rh.ray.tfar);
+                          }
+                        }
+                        return;
+                      }
+                      // Packets of 4 x 4 pixels; lanes outside the image or the mesh's window stay
+                      // invalid.
+                      for (int by = r.rows().begin(); by < r.rows().end(); by += 4) {
+                        for (int bx = r.cols().begin(); bx < r.cols().end(); bx += 4) {
+                          alignas(64) int valid[16];
+                          alignas(64) RTCRayHit16 rh;
+                          Vec3d dirs[16];
+                          bool any = false;
+                          for (int k = 0; k < 16; ++k) {
+                            const int x = bx + (k & 3), y = by + (k >> 2);
+                            valid[k] = 0;
+                            if (x >= r.cols().end() || y >= r.rows().end()) continue;
+                            const Vec3d d = direction(x, y);
+                            dirs[k] = d;
+                            const std::size_t i = g.index(x, y);
+                            put4(g.direction, i, d);
+                            set_miss(g, i);
+                            if (!window.contains(x, y)) continue;
+                            valid[k] = -1;
+                            any = true;
+                            rh.ray.org_x[k] = ox;
+                            rh.ray.org_y[k] = oy;
+                            rh.ray.org_z[k] = oz;
+                            rh.ray.dir_x[k] = static_cast<float>(d.x);
+                            rh.ray.dir_y[k] = static_cast<float>(d.y);
+                            rh.ray.dir_z[k] = static_cast<float>(d.z);
+                            rh.ray.tnear[k] = 0.f;
+                            rh.ray.tfar[k] = kInf;
+                            rh.ray.mask[k] = ~0u;
+                            rh.ray.time[k] = 0.f;
+                            rh.ray.flags[k] = 0;
+                            rh.ray.id[k] = static_cast<unsigned>(k);
+                            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                            rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+                            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                          }
+                          if (!any) continue;
+                          rtcIntersect16(valid, im.scene, &context, &rh);
+                          for (int k = 0; k < 16; ++k) {
+                            if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                            const int x = bx + (k & 3), y = by + (k >> 2);
+                            store_hit(g.index(x, y), dirs[k], rh.hit.primID[k], rh.hit.u[k],
+                                      rh.hit.v[k], rh.ray.tfar[k]);
+                          }
+                        }
+                      }
+                    });
 }
 
 GBuffer render_gbuffer(const Mesh& mesh, const Camera& camera) {

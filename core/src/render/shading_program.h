@@ -16,6 +16,7 @@ inline constexpr std::size_t kShadingWorkGroup = 64;
 /// Arguments btf_shade_single and btf_view_cache take before PRT_MATERIAL_PARAMS.
 inline constexpr unsigned kSingleMaterialArg = 9;
 inline constexpr unsigned kViewCacheMaterialArg = 5;
+inline constexpr unsigned kViewCacheShadeMaterialArg = 9;
 
 /// `m`: values per vertex of the light basis (PRT_M). Cached like every program.
 cl::Program build_shading_program(ClContext& context, const DeviceMaterial& material, int m,

@@ -25,8 +25,11 @@
 // the view only. It is computed once per G-buffer (a "view-cache" kernel reading the 4 view
 // samples, 1 for a view-independent BTF, x 1 or 4 texels) and kept on the device; every shading
 // pass then reads M RGB values of b per pixel instead of 4 (nearest) or 16 (bilinear) times as
-// many: a light change only does the dot products. Without it, one kernel interpolates and dots in
-// one pass. docs/rendering.md "BTF shading" has the measurements.
+// many: a light change only does the dot products. The first pass after a new G-buffer builds
+// the cache and shades the hit pixels in one kernel (btf_view_cache_shade: the dot product is
+// taken on the values as they are stored, so the image is the one the cached pass gives), then
+// copies the misses' background. Without the cache, one kernel interpolates and dots in one
+// pass. docs/rendering.md "BTF shading" has the measurements.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -112,7 +115,8 @@ class DeviceBtfShader {
   /// Kernel milliseconds (OpenCL profiling) of one shading pass, including the view-cache
   /// kernel when the G-buffer changed since the last pass.
   double shade();
-  /// Kernel milliseconds of the view-cache kernel in the last shade() (0 when it did not run).
+  /// Kernel milliseconds of the view-cache kernel in the last shade(), which also shades the hit
+  /// pixels (0 when it did not run).
   double last_view_cache_ms() const;
   /// Whether shade() runs the cached kernels: ShadingOptions::cache_view_vectors and some part's
   /// material gains from the cache; else the single-pass kernel.
@@ -127,8 +131,10 @@ class DeviceBtfShader {
   std::uint64_t bytes_read_per_frame() const;
   /// Bytes each kind of pass moves for the current G-buffer (reads + the cache write).
   struct PassBytes {
-    std::uint64_t single_pass = 0;   ///< == bytes_read_per_frame()
-    std::uint64_t view_cache = 0;    ///< material reads of the view-cache kernel + its writes
+    std::uint64_t single_pass = 0;  ///< == bytes_read_per_frame()
+    std::uint64_t view_cache =
+        0;  ///< material reads of the view-cache kernel + its cache writes (it also
+            ///< reads 3 vertices' L* to shade the hits: not counted)
     std::uint64_t cached_shade = 0;  ///< b(u, e) + 3 vertices' L* per hit pixel
   };
   PassBytes bytes_per_pass() const;

@@ -106,6 +106,8 @@ class FrameRenderer {
   /// when given, is what misses show (e.g. a finer cubemap of the same environment); without it
   /// misses show the lighting cubemap itself.
   void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
+  /// How set_camera traces the G-buffer (packets by default; kSingle is the reference path).
+  void set_primary_rays(PrimaryRays rays);
   /// Culling on (the default) or off. Off, every light change relights every vertex; either
   /// way a view change relights the visible vertices the current light has not reached, so L*
   /// is never stale where the frame reads it.

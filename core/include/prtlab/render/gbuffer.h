@@ -37,8 +37,8 @@
 #include <vector>
 
 #include "prtlab/geometry/camera.h"
-#include "prtlab/image/image_io.h"
 #include "prtlab/geometry/mesh.h"
+#include "prtlab/image/image_io.h"
 
 namespace prt {
 
@@ -63,6 +63,16 @@ struct GBuffer {
   void reset(int width, int height);
 };
 
+/// How GBufferTracer shoots its primary rays (docs/rendering.md "G-buffer"). Both give the same
+/// G-buffer (tests/core/gbuffer_test.cpp compares them).
+enum class PrimaryRays {
+  /// Embree 16-wide packets of 4 x 4 pixels with coherent flags; only pixels inside the
+  /// projection of the mesh's bounding box are traced (the others are known misses).
+  kPackets,
+  /// One rtcIntersect1 per pixel, every pixel: the reference.
+  kSingle,
+};
+
 /// Primary-ray tracer of a mesh: builds the Embree BVH and the per-vertex frames once, then
 /// traces G-buffers for any number of cameras. Thread-safe for trace(); move-only.
 class GBufferTracer {
@@ -76,7 +86,10 @@ class GBufferTracer {
   GBufferTracer& operator=(const GBufferTracer&) = delete;
 
   /// One ray through every pixel centre, in parallel over 16 x 16 tiles (TBB).
-  GBuffer trace(const Camera& camera) const;
+  GBuffer trace(const Camera& camera, PrimaryRays rays = PrimaryRays::kPackets) const;
+  /// The same into `out`, whose arrays are reused when the image size is unchanged (every
+  /// field of every pixel is overwritten): a frame loop then allocates nothing.
+  void trace(const Camera& camera, GBuffer& out, PrimaryRays rays = PrimaryRays::kPackets) const;
 
  private:
   struct Impl;
