@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "prtlab/image/image_io.h"
 #include "support/cli_runner.h"
@@ -164,6 +165,27 @@ TEST_F(RenderCli, FpsRelightsOnlyOnLightChangesAndWritesReports) {
   const auto written = nlohmann::json::parse(prt::testing::slurp_file(dir_ / "fps" / "tiny.json"));
   EXPECT_EQ(written["light_change"]["relights"], 3);
   EXPECT_NE(prt::testing::slurp_file(md).find("| **fps** |"), std::string::npos);
+
+  // The cost model: the upload's bytes from the hit and pixel counts, and every stage's model
+  // time recomputed from its bytes and FLOPs at the GTX 280's nominal figures.
+  const double pixels = j["width"].get<double>() * j["height"].get<double>();
+  const double hits = j["hit_pixels"].get<double>();
+  std::set<std::string> stages;
+  for (const auto& c : j["cost_model"]) {
+    stages.insert(c["change"].get<std::string>() + "/" + c["stage"].get<std::string>());
+    const double bytes = c["bytes"].get<double>(), flops = c["flops"].get<double>();
+    EXPECT_GT(bytes, 0.0) << c["stage"];
+    const double gtx = c["model_ms"]["GTX 280 (the paper's, 2008)"].get<double>();
+    const double expected = c["upload"].get<bool>()
+                                ? bytes / 6.0e9 * 1e3
+                                : std::max(bytes / 141.7e9, flops / 933.0e9) * 1e3;
+    EXPECT_NEAR(gtx, expected, 1e-9 * expected) << c["stage"];
+    if (c["stage"] == "G-buffer upload") EXPECT_EQ(bytes, 44.0 * hits + 4.0 * pixels);
+  }
+  for (const char* s : {"view/G-buffer", "view/G-buffer upload", "view/view cache + shade hits",
+                        "light/relight", "light/cached shade"})
+    EXPECT_TRUE(stages.contains(s)) << s;
+  EXPECT_NE(prt::testing::slurp_file(md).find("## Cost model"), std::string::npos);
 }
 
 }  // namespace
