@@ -434,52 +434,47 @@ double model_ms(const StageCost& c, const DeviceProfile& d) {
   return std::max(c.bytes / (d.gbps * 1e6), c.flops / (d.gflops * 1e6));
 }
 
-// m: values of the materials' light basis per vertex (L*) and per reflectance vector.
-std::vector<StageCost> view_change_costs(const FrameRenderer& r, const FrameCosts& costs,
-                                         const LoopResult& view, double m) {
-  std::vector<StageCost> out;
+struct StageCosts {
+  std::vector<StageCost> view, light;
+};
+
+// The stages of a view change and of a light change. m: values of the materials' light basis
+// per vertex (L*) and per reflectance vector.
+StageCosts frame_stage_costs(const FrameRenderer& r, const FrameCosts& costs,
+                             const LoopResult& view, const LoopResult& light, double m) {
+  StageCosts out;
   const DeviceBtfShader* shader = r.device_shader();
   const GBuffer& g = r.gbuffer();
   const double pixels = static_cast<double>(g.pixel_count());
   const double hits = static_cast<double>(g.hit_count());
   // G-buffer: the fields shading reads (triangle, part, barycentrics, UV, view: 40 bytes a hit)
   // plus the miss code of every pixel, written once.
-  out.push_back({"G-buffer", hits * 40.0 + pixels * 4.0, 0.0, false, view.stages.gbuffer_ms});
-  out.push_back(
+  out.view.push_back({"G-buffer", hits * 40.0 + pixels * 4.0, 0.0, false, view.stages.gbuffer_ms});
+  out.view.push_back(
       {"G-buffer upload", hits * 44.0 + pixels * 4.0, 0.0, true, view.stages.gbuffer_upload_ms});
   if (shader) {
     const auto b = shader->bytes_per_pass();
     // The view cache pass also reads 3 vertices' L* and writes the hit pixels.
     const double lstar = 3.0 * m * 12.0 * hits;
-    out.push_back({"view cache + shade hits", static_cast<double>(b.view_cache) + lstar + hits * 12,
-                   3.0 * costs.material_flops_per_pixel * hits, false,
-                   view.stages.view_cache_kernel_ms});
-    out.push_back({"misses (background)", (pixels - hits) * 16.0 + pixels * 4.0, 0.0, false,
-                   view.stages.shade_kernel_ms - view.stages.view_cache_kernel_ms});
+    out.view.push_back(
+        {"view cache + shade hits", static_cast<double>(b.view_cache) + lstar + hits * 12,
+         3.0 * costs.material_flops_per_pixel * hits, false, view.stages.view_cache_kernel_ms});
+    out.view.push_back({"misses (background)", (pixels - hits) * 16.0 + pixels * 4.0, 0.0, false,
+                        view.stages.shade_kernel_ms - view.stages.view_cache_kernel_ms});
   }
-  return out;
-}
-
-std::vector<StageCost> light_change_costs(const FrameRenderer& r, const FrameCosts& costs,
-                                          const LoopResult& light, double m) {
-  std::vector<StageCost> out;
-  const DeviceBtfShader* shader = r.device_shader();
-  const GBuffer& g = r.gbuffer();
-  const double pixels = static_cast<double>(g.pixel_count());
-  const double hits = static_cast<double>(g.hit_count());
   const double culled = r.culls() ? static_cast<double>(r.visible_vertices().size()) /
                                         static_cast<double>(r.mesh().positions.size())
                                   : 1.0;
   // The relight reads its stored state once (the share of the visible vertices when culled),
   // the light vector, and writes L*.
-  out.push_back({"relight",
-                 static_cast<double>(costs.transfer_bytes) * culled +
-                     static_cast<double>(r.mesh().positions.size()) * culled * m * 12.0,
-                 costs.transfer_flops * culled, false, light.stages.relight_kernel_ms});
+  out.light.push_back({"relight",
+                       static_cast<double>(costs.transfer_bytes) * culled +
+                           static_cast<double>(r.mesh().positions.size()) * culled * m * 12.0,
+                       costs.transfer_flops * culled, false, light.stages.relight_kernel_ms});
   if (shader) {
-    out.push_back({"cached shade",
-                   static_cast<double>(shader->bytes_per_pass().cached_shade) + pixels * 16.0,
-                   hits * 3.0 * 2.0 * m, false, light.stages.shade_kernel_ms});
+    out.light.push_back({"cached shade",
+                         static_cast<double>(shader->bytes_per_pass().cached_shade) + pixels * 16.0,
+                         hits * 3.0 * 2.0 * m, false, light.stages.shade_kernel_ms});
   }
   return out;
 }
@@ -569,7 +564,8 @@ std::string load_average() {
 
 std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer& r,
                          const LoopResult& view, const LoopResult& light,
-                         const experiments::Provenance& prov, const std::string& load) {
+                         const StageCosts& stage_costs, const experiments::Provenance& prov,
+                         const std::string& load) {
   const auto paper = paper_fps(p.desc.name);
   const std::size_t hits = r.gbuffer().hit_count();
   std::string md;
@@ -653,10 +649,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       p.setup_seconds, p.transfer_cache_hit ? "from cache" : "computed",
       p.compress_cache_hit ? "from cache" : "computed", p.btf_cache_hits,
       p.materials.part_material.size());
-  const double m = p.materials.part_material.front()->light_basis().dim;
-  const FrameCosts costs = frame_costs(p);
-  md += cost_model_markdown(view_change_costs(r, costs, view, m),
-                            light_change_costs(r, costs, light, m));
+  md += cost_model_markdown(stage_costs.view, stage_costs.light);
   return md;
 }
 
@@ -741,12 +734,9 @@ void run_fps(const FpsCli& o) {
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);
   j["view_to_light_frame_ratio"] = view_to_light_ratio(view, light);
-  {
-    const double m = p.materials.part_material.front()->light_basis().dim;
-    const FrameCosts costs = frame_costs(p);
-    j["cost_model"] = cost_model_json(view_change_costs(r, costs, view, m),
-                                      light_change_costs(r, costs, light, m));
-  }
+  const StageCosts stage_costs = frame_stage_costs(
+      r, frame_costs(p), view, light, p.materials.part_material.front()->light_basis().dim);
+  j["cost_model"] = cost_model_json(stage_costs.view, stage_costs.light);
   j["paper"] = paper ? nlohmann::json{{"table", paper->table},
                                       {"view_fps", paper->view},
                                       {"light_fps", paper->light},
@@ -765,7 +755,7 @@ void run_fps(const FpsCli& o) {
   if (!o.out.empty()) {
     const fs::path md_path(o.out);
     if (md_path.has_parent_path()) fs::create_directories(md_path.parent_path());
-    write_text_atomically(md_path, fps_markdown(o, p, r, view, light, prov, load));
+    write_text_atomically(md_path, fps_markdown(o, p, r, view, light, stage_costs, prov, load));
     write_text_atomically(fs::path(md_path).replace_extension(".json"), j.dump(2) + "\n");
   }
   if (o.json) {

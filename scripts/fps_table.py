@@ -35,6 +35,12 @@ def backends(prtlab):
     return [b["name"] for b in listed.get("compressors", listed.get("backends", []))]
 
 
+def write_atomically(path, text):
+    tmp = path.with_name(path.name + f".tmp.{os.getpid()}")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
 def run_one(args, scene, backend, out):
     md = out / f"{scene}-{backend}.md"
     cmd = [args.prtlab, "-q", "fps", scene, "--backend", backend, "--material", args.material,
@@ -107,7 +113,7 @@ def summary(out, runs, args):
            "Table II lists the 3,286-vertex bunny at 277.9 / 86.8 fps, Table I at 97.0 / 56.1); "
            "they stand beside every backend for scale. Why ours differ: docs/rendering.md "
            "\"Frame rates\" and results/fps/README.md.", ""]
-    (out / "README.md").write_text("\n".join(md) + "\n")
+    write_atomically(out / "README.md", "\n".join(md) + "\n")
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -177,7 +183,7 @@ def before_after(folder):
                 f"{vs['gbuffer_ms']:.2f} + {vs['gbuffer_upload_ms']:.2f} + {vs['relight_ms']:.2f} + "
                 f"{vs['shade_ms']:.2f} ({vs['view_cache_kernel_ms']:.2f}) | "
                 f"{ls['relight_ms']:.2f} + {ls['upload_ms']:.2f} + {ls['shade_ms']:.2f} |")
-    (folder / "README.md").write_text("\n".join(md) + "\n")
+    write_atomically(folder / "README.md", "\n".join(md) + "\n")
     print(f"wrote {folder / 'README.md'}")
 
 
@@ -210,9 +216,7 @@ def main():
                     continue
                 r = run_one(args, scene, b, out)
                 runs = [x for x in runs if (x["scene"], x["backend"]) != (scene, b)] + [r]
-                tmp = runs_file.with_suffix(".tmp")
-                tmp.write_text(json.dumps(runs, indent=1) + "\n")
-                os.replace(tmp, runs_file)
+                write_atomically(runs_file, json.dumps(runs, indent=1) + "\n")
                 print(f"{scene:10s} {b:15s} {r['status']} ({r['seconds']} s)", flush=True)
     summary(out, runs, args)
     print(f"wrote {out / 'README.md'}")

@@ -165,17 +165,24 @@ TEST(GBuffer, PlaneUvAndFrame) {
   }
 }
 
-// Parts come from the mesh's triangle parts; two traces of one tracer agree bit for bit.
-TEST(GBuffer, PartsAndDeterminism) {
-  Mesh left = make_sphere(0.5, 24, 12), right = make_box(Vec3d(0.4), 2);
+// A sphere (part 0) left of the origin and a box (part 1) right of it, the box raised by
+// `box_lift`.
+Mesh sphere_and_box(int segments, int rings, double box_lift) {
+  Mesh left = make_sphere(0.5, segments, rings), right = make_box(Vec3d(0.4), 2);
   Transform xf;
   xf.translate = {-0.7, 0, 0};
   apply_transform(left, xf);
-  xf.translate = {0.7, 0, 0};
+  xf.translate = {0.7, box_lift, 0};
   apply_transform(right, xf);
   Mesh scene;
   scene.append(left, 0);
   scene.append(right, 1);
+  return scene;
+}
+
+// Parts come from the mesh's triangle parts; two traces of one tracer agree bit for bit.
+TEST(GBuffer, PartsAndDeterminism) {
+  const Mesh scene = sphere_and_box(24, 12, 0.0);
   Camera cam;
   cam.eye = {0, 0, 5};
   cam.width = 80;
@@ -205,15 +212,7 @@ TEST(GBuffer, PartsAndDeterminism) {
 // small in the image (most pixels outside its window), partly outside the image, the eye
 // inside the bounding box (no window), and a non-multiple-of-4 image size.
 TEST(GBuffer, PacketsEqualSingleRays) {
-  Mesh left = make_sphere(0.5, 40, 20), right = make_box(Vec3d(0.4), 2);
-  Transform xf;
-  xf.translate = {-0.7, 0, 0};
-  apply_transform(left, xf);
-  xf.translate = {0.7, 0.2, 0};
-  apply_transform(right, xf);
-  Mesh scene;
-  scene.append(left, 0);
-  scene.append(right, 1);
+  const Mesh scene = sphere_and_box(40, 20, 0.2);
   const GBufferTracer tracer(scene);
   std::vector<Camera> cams(4);
   cams[0].eye = {0, 0, 7};
