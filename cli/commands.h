@@ -37,6 +37,10 @@ void add_render_commands(CLI::App& app);
 void add_image_commands(CLI::App& app);
 void add_sh_commands(CLI::App& app);
 
+/// After a failed parse: "unknown command 'X' for 'prtlab env' (commands: ...)" when the deepest
+/// command that was parsed has subcommands and the next word was none of them.
+std::optional<std::string> unknown_command(const CLI::App& app);
+
 /// The OpenCL context the global options ask for; nullopt with --no-opencl or without OpenCL.
 std::optional<ClContext> open_device_from_options();
 

@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/image/image_io.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/lighting/srbf_light.h"
@@ -43,6 +44,16 @@ EnvStats env_stats(const LatLongImage& image) {
   return s;
 }
 
+double dynamic_range(const LatLongImage& image) {
+  float lo = std::numeric_limits<float>::infinity(), hi = 0.f;
+  for (const Rgb& t : image.texels)
+    for (int c = 0; c < 3; ++c) {
+      if (t[c] > 0.f) lo = std::min(lo, t[c]);
+      hi = std::max(hi, t[c]);
+    }
+  return hi > 0.f ? static_cast<double>(hi) / lo : 0.0;
+}
+
 std::string rgb_text(const Vec3d& v) {
   return fmt::format("{:.6g} {:.6g} {:.6g}", v.x, v.y, v.z);
 }
@@ -72,7 +83,9 @@ void run_info(const InfoOptions& o) {
                 {"max", rgb_json(s.max)},
                 {"mean", rgb_json(s.mean)},
                 {"power", rgb_json(s.power)},
-                {"invalid_texels", report.invalid_texels}});
+                {"invalid_texels", report.invalid_texels},
+                {"aspect_2_to_1", report.aspect_2_to_1},
+                {"warnings", named_warning_counts()}});
     return;
   }
   std::printf("file            %s\n", file.string().c_str());
@@ -83,6 +96,10 @@ void run_info(const InfoOptions& o) {
   std::printf("power           %s   (integral of radiance over the sphere)\n",
               rgb_text(s.power).c_str());
   std::printf("invalid texels  %zu   (NaN, Inf or negative; set to 0)\n", report.invalid_texels);
+  std::printf("dynamic range   %.3g   (largest channel value / smallest positive one)\n",
+              dynamic_range(image));
+  for (const auto& [name, count] : named_warning_counts())
+    std::printf("warning         %s (see above)\n", name.c_str());
 }
 
 struct CubemapOptions {
@@ -101,8 +118,15 @@ void run_cubemap(const CubemapOptions& o) {
   const Cubemap cubemap = resample_to_cubemap(image, o.resolution);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_exr(cubemap_strip_image(cubemap), o.out);
-  if (!o.preview.empty()) write_png(cubemap_cross_image(cubemap), o.preview);
+  // The cubemap and its preview together or neither.
+  std::vector<PendingFile> files{{o.out, [&](const std::filesystem::path& tmp) {
+                                    write_exr(cubemap_strip_image(cubemap), tmp);
+                                  }}};
+  if (!o.preview.empty())
+    files.push_back({o.preview, [&](const std::filesystem::path& tmp) {
+                       write_png(cubemap_cross_image(cubemap), tmp);
+                     }});
+  write_files_atomically(files);
 
   const Vec3d before = image.total_power(), after = cubemap.total_power();
   const Vec3d rel = relative_difference(after, before);
@@ -199,9 +223,16 @@ void run_fit_srbf(const FitSrbfOptions& o) {
                       {"uniform_relative_error", uniform_error},
                       {"fit", srbf_json(fit)},
                       {"provenance", provenance()}};
-  if (!o.out.empty()) write_text_atomically(o.out, j.dump(2) + "\n");
+  std::vector<PendingFile> files;
+  const std::string text = j.dump(2) + "\n";
+  if (!o.out.empty())
+    files.push_back(
+        {o.out, [&](const std::filesystem::path& tmp) { write_text_atomically(tmp, text); }});
   if (!o.preview.empty())
-    write_png(stacked_crosses(fit.to_cubemap(o.resolution), light), o.preview);
+    files.push_back({o.preview, [&](const std::filesystem::path& tmp) {
+                       write_png(stacked_crosses(fit.to_cubemap(o.resolution), light), tmp);
+                     }});
+  write_files_atomically(files);
   if (o.json) {
     j.erase("fit");
     j["out"] = o.out.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.out);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 
 #include "commands.h"
 #include "experiment_report.h"
@@ -17,6 +18,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "stability_suite.h"
 #include "table_report.h"
 
 namespace prt::cli {
@@ -155,9 +157,30 @@ nlohmann::json run_table_file(const std::filesystem::path& file, const std::stri
   return experiments::run_material_table(file, mo);
 }
 
+// The stability suite (kind "stability", stability_suite.h) runs its own way too.
+nlohmann::json run_stability_file(const std::filesystem::path& file, const std::string& variant,
+                                  const RunCli& o, const std::vector<std::string>& cases = {}) {
+  experiments::StabilityOptions so;
+  so.out_root = o.out;
+  so.variant = variant;
+  so.cases = cases;
+  so.command_line = command_line_from_provenance();
+  so.show_progress = !global_options().quiet;
+  return experiments::run_stability_suite(file, so);
+}
+
 void run_file(const RunCli& o) {
   const auto file = experiments::resolve_experiment(o.experiment);
   const std::string variant = variant_of(o);
+  if (experiments::is_stability_suite(file)) {
+    const auto r = run_stability_file(file, variant, o);
+    if (o.json)
+      print_json(r);
+    else
+      std::printf("wrote %s (README.md, result.json, cases.csv)\n",
+                  r.at("folder").get<std::string>().c_str());
+    return;
+  }
   if (experiments::is_material_table(file)) {
     auto ctx = open_device_from_options();
     const auto r = run_table_file(file, variant, o, ctx ? &*ctx : nullptr);
@@ -191,31 +214,48 @@ void run_all(const RunCli& o) {
     if (!quiet) std::fprintf(stderr, "== experiment %s\n", name);
     run_table(t);
   }
+  // A file of its own kind (a material table, the stability suite): skipped when it lacks the
+  // variant or its folder is complete (without --force), else run.
+  auto run_own_kind = [&](const std::filesystem::path& file,
+                          const std::vector<std::string>& variants,
+                          const std::function<std::filesystem::path()>& folder_of,
+                          const std::function<nlohmann::json()>& run) {
+    if (!variant.empty() &&
+        std::find(variants.begin(), variants.end(), variant) == variants.end()) {
+      if (!quiet)
+        std::fprintf(stderr, "== experiment %s: skipped (no [variant.%s])\n",
+                     file.stem().string().c_str(), variant.c_str());
+      return;
+    }
+    const auto folder = folder_of();
+    if (!o.force && std::filesystem::exists(folder / ".complete")) {
+      if (!quiet)
+        std::fprintf(stderr, "== experiment %s: %s is complete (--force reruns it)\n",
+                     file.stem().string().c_str(), folder.string().c_str());
+      return;
+    }
+    if (!quiet) std::fprintf(stderr, "== experiment %s\n", file.stem().string().c_str());
+    const auto r = run();
+    std::printf("wrote %s\n", r.at("folder").get<std::string>().c_str());
+  };
   // One file's failure (a backend it names is not loaded, a scene missing) does not stop the
   // others; the command fails at the end, naming each.
   std::vector<std::string> failures;
   const auto files = experiments::experiment_files();
   for (const auto& file : files) {
     try {
+      if (experiments::is_stability_suite(file)) {
+        run_own_kind(
+            file, experiments::stability_suite_variants(file),
+            [&] { return experiments::stability_suite_folder(file, variant, o.out); },
+            [&] { return run_stability_file(file, variant, o); });
+        continue;
+      }
       if (experiments::is_material_table(file)) {
-        const auto variants = experiments::material_table_variants(file);
-        if (!variant.empty() &&
-            std::find(variants.begin(), variants.end(), variant) == variants.end()) {
-          if (!quiet)
-            std::fprintf(stderr, "== experiment %s: skipped (no [variant.%s])\n",
-                         file.stem().string().c_str(), variant.c_str());
-          continue;
-        }
-        const auto folder = experiments::material_table_folder(file, variant, o.out);
-        if (!o.force && std::filesystem::exists(folder / ".complete")) {
-          if (!quiet)
-            std::fprintf(stderr, "== experiment %s: %s is complete (--force reruns it)\n",
-                         file.stem().string().c_str(), folder.string().c_str());
-          continue;
-        }
-        if (!quiet) std::fprintf(stderr, "== experiment %s\n", file.stem().string().c_str());
-        const auto r = run_table_file(file, variant, o, ctx ? &*ctx : nullptr);
-        std::printf("wrote %s\n", r.at("folder").get<std::string>().c_str());
+        run_own_kind(
+            file, experiments::material_table_variants(file),
+            [&] { return experiments::material_table_folder(file, variant, o.out); },
+            [&] { return run_table_file(file, variant, o, ctx ? &*ctx : nullptr); });
         continue;
       }
       const auto variants = experiments::experiment_variants(file);
@@ -255,6 +295,15 @@ void list_experiments(bool json) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& file : experiments::experiment_files()) {
     experiments::ExperimentSpec spec;
+    if (experiments::is_stability_suite(file)) {
+      list.push_back(
+          {{"name", file.stem().string()},
+           {"title", "numerical-stability suite (docs/experiments.md \"Stability suite\")"},
+           {"file", file.string()},
+           {"kind", "stability"},
+           {"variants", experiments::stability_suite_variants(file)}});
+      continue;
+    }
     if (experiments::is_material_table(file)) {
       list.push_back({{"name", file.stem().string()},
                       {"title", "material table (docs/experiments.md \"Material tables\")"},
@@ -308,8 +357,9 @@ void add_run_options(CLI::App* c, RunCli& o) {
 }  // namespace
 
 void add_experiment_commands(CLI::App& app) {
-  auto* exp = app.add_subcommand(
-      "experiment", "Regenerate the papers' tables: table1, table2 (docs/experiments.md)");
+  auto* exp = app.add_subcommand("experiment",
+                                 "Regenerate the papers' tables: table1, table2; run experiment "
+                                 "files; the stability suite (docs/experiments.md)");
   exp->require_subcommand(1);
   for (const char* name : {"table1", "table2"}) {
     auto o = std::make_shared<TableCli>();
@@ -368,6 +418,25 @@ void add_experiment_commands(CLI::App& app) {
   add_run_options(all, *ao);
   all->add_option("--variant", ao->variant, "Variant of each file that declares it");
   all->callback([ao] { run_all(*ao); });
+
+  auto so = std::make_shared<std::pair<RunCli, std::vector<std::string>>>();
+  auto* stab = exp->add_subcommand(
+      "stability",
+      "The numerical-stability suite: every backend and material under inputs that break "
+      "numerics (experiments/stability.toml into results/stability/)");
+  stab->add_flag("--quick", so->first.quick, "Run the file's [variant.quick] (seconds)");
+  stab->add_option("--out", so->first.out, "Root of the result folders")->capture_default_str();
+  stab->add_option("--cases", so->second, "Only these cases (comma-separated)")->delimiter(',');
+  stab->add_flag("--json", so->first.json, "Print result.json");
+  stab->callback([so] {
+    const auto file = experiments::resolve_experiment("stability");
+    const auto r = run_stability_file(file, variant_of(so->first), so->first, so->second);
+    if (so->first.json)
+      print_json(r);
+    else
+      std::printf("wrote %s (README.md, result.json, cases.csv)\n",
+                  r.at("folder").get<std::string>().c_str());
+  });
 
   auto lj = std::make_shared<bool>(false);
   auto* list = exp->add_subcommand("list", "The experiments there are");

@@ -9,10 +9,12 @@
 #include "prtlab/base/log.h"
 #include "prtlab/base/progress.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/atomic_file.h"
 
 int main(int argc, char** argv) {
   using namespace prt;
   cli::set_command_line(argc, argv);
+  remove_temporaries_on_signal();
   CLI::App app{"prtlab: compare compressors of precomputed radiance transfer", "prtlab"};
   app.require_subcommand(1);
   app.set_version_flag("--version", fmt::format("prtlab {} ({}, {})", build_info().version,
@@ -58,6 +60,12 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // CLI11 reads an unknown command as a stray argument and says only that a subcommand is
+    // required; name the word that was not one, and the commands that are.
+    if (const auto unknown = cli::unknown_command(app)) {
+      std::fprintf(stderr, "prtlab: error: %s\n", unknown->c_str());
+      return e.get_exit_code();
+    }
     return app.exit(e);
   } catch (const prt::Error& e) {
     std::fprintf(stderr, "prtlab: error: %s\n", e.what());

@@ -14,6 +14,7 @@
 #include "paper_numbers.h"
 #include "provenance.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
@@ -23,6 +24,7 @@
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/storage/atomic_file.h"
 #include "prtlab/storage/data_paths.h"
+#include "prtlab/transfer/local_radiance.h"
 #include "prtlab/transfer/scene_transfer.h"
 
 namespace prt::cli {
@@ -269,12 +271,21 @@ void run_render(const RenderCli& o) {
                                        : fs::path(o.png);
   if (out.has_parent_path()) fs::create_directories(out.parent_path());
   if (png.has_parent_path()) fs::create_directories(png.parent_path());
+  if (const std::size_t bad = count_nonfinite(image.pixels))
+    throw NumericalError(
+        fmt::format("the rendered image has {} non-finite pixels of {} (the "
+                    "light or the compressed data overflows float); nothing "
+                    "written",
+                    bad, image.pixels.size()));
+  // The EXR and its PNG together or neither: a failing PNG path must not leave a lone EXR.
   std::string exr_written;
+  std::vector<PendingFile> files;
   if (ext == ".exr") {
-    write_exr(image, out);
+    files.push_back({out, [&](const fs::path& tmp) { write_exr(image, tmp); }});
     exr_written = out.string();
   }
-  write_png(image, png, tm);
+  files.push_back({png, [&](const fs::path& tmp) { write_png(image, tmp, tm); }});
+  write_files_atomically(files);
 
   const std::size_t hits = renderer.gbuffer().hit_count();
   if (o.json) {

@@ -3,8 +3,9 @@
 #include <vector>
 
 #include "commands.h"
-#include "prtlab/storage/data_paths.h"
+#include "prtlab/btf/scene_btfs.h"
 #include "prtlab/geometry/scene.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt::cli {
 namespace {
@@ -18,6 +19,7 @@ void run_scene_info(const SceneInfoOptions& o) {
   const auto file = resolve_scene(o.scene);
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = load_scene(file);
+  check_scene_btf_names(scene.desc);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Mesh& mesh = scene.mesh;
   const Aabb box = mesh.bounds();

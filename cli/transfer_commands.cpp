@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "paper_numbers.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/backend_evaluation.h"
 #include "prtlab/compress/backend_input.h"
@@ -222,6 +223,11 @@ void run_relight(const RelightCli& o) {
     ms_eigen = time_ms([&] { eig.multiply(dense, res); });
   }
   relight_exact(t, light, out.values);
+  if (const std::size_t bad = count_nonfinite(out.values))
+    throw NumericalError(
+        fmt::format("{}: the relight has {} non-finite values of {} (the "
+                    "radiance overflows float accumulation)",
+                    env_file.string(), bad, out.values.size()));
   // Float vs double accumulation: the runtime precision error DESIGN.md asks to report.
   const auto ref = relight_exact_double(t, light);
   double num = 0, den = 0;

@@ -223,6 +223,27 @@ nlohmann::json to_json(const ExperimentSpec& s) {
   return j;
 }
 
+std::string declared_kind(const fs::path& file) {
+  try {
+    const toml::table t = toml::parse_file(file.string());
+    return t["kind"].value_or(std::string());
+  } catch (...) {
+    return {};
+  }
+}
+
+std::vector<std::string> declared_variants(const fs::path& file) {
+  std::vector<std::string> out;
+  try {
+    const toml::table t = toml::parse_file(file.string());
+    if (const auto* v = t["variant"].as_table())
+      for (const auto& [k, unused] : *v) out.emplace_back(k.str());
+  } catch (...) {
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<std::string> experiment_variants(const fs::path& file) {
   const toml::table root = load_table(file);
   std::vector<std::string> out;

@@ -109,6 +109,13 @@ nlohmann::json evaluation_json(const ExperimentSpec& spec);
 /// The whole parsed spec (result.json's "experiment").
 nlohmann::json to_json(const ExperimentSpec& spec);
 
+/// The `kind` a file declares ("" when it has none or cannot be read: the caller's own parser
+/// then reports the problem). Kinds with their own runner (material tables, the stability suite)
+/// dispatch on it.
+std::string declared_kind(const std::filesystem::path& file);
+/// The [variant.<name>] tables a file declares, sorted (empty when it cannot be read).
+std::vector<std::string> declared_variants(const std::filesystem::path& file);
+
 /// The variants a file declares ("full", "quick"), sorted by name.
 std::vector<std::string> experiment_variants(const std::filesystem::path& file);
 

@@ -244,24 +244,11 @@ std::string mb(double bytes) {
 }  // namespace
 
 std::vector<std::string> material_table_variants(const fs::path& file) {
-  std::vector<std::string> out;
-  try {
-    const toml::table t = toml::parse_file(file.string());
-    if (const auto* v = t["variant"].as_table())
-      for (const auto& [k, unused] : *v) out.emplace_back(k.str());
-  } catch (...) {
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return declared_variants(file);
 }
 
 bool is_material_table(const fs::path& file) {
-  try {
-    const toml::table t = toml::parse_file(file.string());
-    return t["kind"].value_or(std::string()) == "material_table";
-  } catch (...) {
-    return false;
-  }
+  return declared_kind(file) == "material_table";
 }
 
 void check_material_table(const fs::path& file, const std::string& variant) {

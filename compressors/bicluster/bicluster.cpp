@@ -4,8 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <span>
 
@@ -542,6 +544,68 @@ void BiclusterTransfer::save(ArchiveWriter& w) const {
   w.add_section("slice_codes", a_.slice_codes);
 }
 
+namespace {
+
+// What a lossless archive stands for can be checked without T: its sum of biclusters must be a
+// matrix of sample counts. Pixel k's s^2 samples land, at vertex v, in at most one local bin
+// each, so every entry is in [0, s^2] and so is the sum over v's M rows of column k. A column
+// out of order, an id pointing at the wrong bicluster or a damaged constant breaks one of
+// them, however consistent the checksums are. Parallel over vertices, O(stored incidences).
+void verify_counts(const BiclusterArrays& a, const std::vector<std::uint32_t>& lane_of_row,
+                   const std::filesystem::path& file) {
+  const std::int64_t max_count = static_cast<std::int64_t>(a.supersampling) * a.supersampling;
+  const std::size_t m = static_cast<std::size_t>(a.local_count);
+  const std::size_t n = static_cast<std::size_t>(a.pixel_count);
+  std::atomic<bool> failed{false};
+  std::mutex mutex;
+  std::string problem;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.vertices, 64), [&](const auto& range) {
+    std::vector<std::int64_t> row_sum(n, 0), vertex_sum(n, 0);
+    std::vector<std::uint32_t> row_touched, vertex_touched;
+    auto fail = [&](std::string what) {
+      const std::lock_guard lock(mutex);
+      if (!failed.exchange(true)) problem = std::move(what);
+    };
+    for (std::size_t v = range.begin(); v != range.end() && !failed.load(); ++v) {
+      for (std::size_t j = 0; j < m; ++j) {
+        const std::size_t row = v * m + j;
+        const std::uint32_t p = lane_of_row[row];
+        a.for_each_id(p / kSliceRows, static_cast<int>(p % kSliceRows), [&](std::uint32_t id) {
+          for (std::uint32_t q = a.bic_col_offsets[id]; q < a.bic_col_offsets[id + 1]; ++q) {
+            const std::uint32_t k = a.bic_columns[q];
+            if (row_sum[k] == 0) row_touched.push_back(k);
+            row_sum[k] += a.bic_constants[q];
+          }
+        });
+        for (const std::uint32_t k : row_touched) {
+          const std::int64_t c = row_sum[k];
+          if (c < 0 || c > max_count)
+            fail(fmt::format("row {} column {} sums to {} samples, outside [0, {}]", row, k, c,
+                             max_count));
+          if (vertex_sum[k] == 0 && c != 0) vertex_touched.push_back(k);
+          vertex_sum[k] += c;
+          row_sum[k] = 0;
+        }
+        row_touched.clear();
+      }
+      for (const std::uint32_t k : vertex_touched) {
+        if (vertex_sum[k] > max_count)
+          fail(
+              fmt::format("vertex {} receives {} samples of pixel {} over its {} bins, more than "
+                          "the pixel's {}",
+                          v, vertex_sum[k], k, m, max_count));
+        vertex_sum[k] = 0;
+      }
+      vertex_touched.clear();
+    }
+  });
+  if (failed)
+    throw InputError(file,
+                     fmt::format("{}: the archive is not a lossless transfer: {}", kName, problem));
+}
+
+}  // namespace
+
 std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader& r) {
   const int version = r.meta_value<int>("bicluster_version");
   if (version != kStateVersion)
@@ -589,6 +653,14 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   const auto n = static_cast<std::uint32_t>(a.pixel_count);
   if (std::any_of(a.bic_columns.begin(), a.bic_columns.end(), [&](auto k) { return k >= n; }))
     throw invalid(fmt::format("a column id is >= N = {}", n));
+  for (std::size_t i = 0; i < a.bicluster_count(); ++i)
+    for (std::uint32_t q = a.bic_col_offsets[i] + 1; q < a.bic_col_offsets[i + 1]; ++q)
+      if (a.bic_columns[q] <= a.bic_columns[q - 1])
+        throw invalid(fmt::format("bicluster {}'s columns are not increasing ({} after {})", i,
+                                  a.bic_columns[q], a.bic_columns[q - 1]));
+  if (std::any_of(a.bic_constants.begin(), a.bic_constants.end(),
+                  [](std::int16_t c) { return c == 0; }))
+    throw invalid("a bicluster column has the constant 0 (the search never stores one)");
   // Every row in exactly one lane; a lane's ids below B (no id in an empty lane).
   const std::size_t nb = a.bicluster_count(), rows = a.rows();
   std::vector<std::uint8_t> seen(rows, 0);
@@ -609,6 +681,7 @@ std::unique_ptr<CompressedTransfer> BiclusterTransfer::load(const ArchiveReader&
   }
   if (std::count(seen.begin(), seen.end(), 1) != static_cast<std::ptrdiff_t>(rows))
     throw invalid(fmt::format("the slices do not list all {} rows", rows));
+  if (a.bound == 0) verify_counts(a, row_lanes(a), r.path());
   return std::make_unique<BiclusterTransfer>(std::move(a));
 }
 

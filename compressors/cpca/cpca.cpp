@@ -6,6 +6,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/storage/index_section.h"
@@ -38,6 +39,12 @@ class CpcaCompressor final : public Compressor {
     ClusteredPcaOptions o = p_.options;
     // A small transfer gets what it can hold: one row per cluster at most, and no more vectors
     // than the light has pixels (README, "Parameters").
+    if (static_cast<std::size_t>(o.clusters) > std::max<std::size_t>(1, t.rows()))
+      log_warn_named("cpca-clusters-clamped", "{}: clusters = {} for {} rows; using {}", kName,
+                     o.clusters, t.rows(), std::max<std::size_t>(1, t.rows()));
+    if (static_cast<std::size_t>(o.components) > t.cols())
+      log_warn_named("cpca-vectors-clamped", "{}: vectors = {} for {} pixels; using {}", kName,
+                     o.components, t.cols(), t.cols());
     o.clusters =
         static_cast<int>(std::min<std::size_t>(o.clusters, std::max<std::size_t>(1, t.rows())));
     o.components = static_cast<int>(std::min<std::size_t>(o.components, t.cols()));

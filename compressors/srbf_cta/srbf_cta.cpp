@@ -16,6 +16,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/lighting/srbf_light.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/sphere/icosphere.h"
@@ -24,6 +25,8 @@
 
 namespace prt::srbf_cta {
 namespace {
+
+constexpr double kIllConditionedGram = 1e10;
 
 using Clock = std::chrono::steady_clock;
 using MatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -234,6 +237,20 @@ class SrbfCtaCompressor final : public Compressor {
     const double bandwidth = uniform_gaussian_bandwidth(centres) / (p_.spread * p_.spread);
     const auto projector = std::make_shared<const SrbfProjector>(
         transfer_basis(p_.srbfs, bandwidth), input.cubemap, p_.ridge);
+    // Wide or dense SRBFs make the Gram matrix singular to rounding; the ridge keeps the solve
+    // stable but then bounds the fit's accuracy, which the user should know. Double precision
+    // loses all digits of an unregularised solve past 1e16.
+    if (projector->gram_condition_number() > kIllConditionedGram)
+      log_warn_named("srbf-gram-ill-conditioned",
+                     "{}: the Gram matrix of {} SRBFs (spread {}) has condition number {:.3g}; "
+                     "{}",
+                     kName, p_.srbfs, p_.spread, projector->gram_condition_number(),
+                     projector->alpha() > 0
+                         ? fmt::format("solved with the ridge alpha = {:.3g} (condition {:.3g}), "
+                                       "which limits how closely the SRBFs can fit T",
+                                       projector->alpha(), projector->condition_number())
+                         : std::string("solved without a ridge (ridge = 0): the projection "
+                                       "amplifies rounding errors"));
     const Projection proj = project_rows(t, *projector, input.cubemap, progress, projection_budget);
     log_debug(
         "{}: {} rows onto {} SRBFs (lambda {:.4g}, Gram condition {:.3g}, ridge alpha "

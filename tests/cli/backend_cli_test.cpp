@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -29,6 +31,21 @@ class BackendCli : public ::testing::Test {
   fs::path dir_ = tmp_.path();
   std::string env_;
 };
+
+// PoCL will not start without a writable kernel cache, and the ICD loader then lists no
+// platform: an unwritable prtlab cache must move PoCL's cache elsewhere and say so, not make the
+// driver look missing. (A path below a regular file is unwritable even for root.)
+TEST_F(BackendCli, AnUnwritableCacheDoesNotHideOpenCL) {
+  std::ofstream(dir_ / "blocker") << "a file, not a folder";
+  const auto r = run_cli(
+      "devices --json", dir_,
+      "env -u POCL_CACHE_DIR PRTLAB_CACHE=\"" + (dir_ / "blocker" / "cache").string() + "\" ");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["devices"].empty()) << r.err;
+  EXPECT_NE(r.err.find("[cache-not-writable]"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("install pocl"), std::string::npos) << r.err;
+}
 
 TEST_F(BackendCli, PrecomputeTwiceIsACacheHit) {
   const auto first = run_json("-q precompute tiny-sphere-plane --json");

@@ -169,5 +169,59 @@ TEST_F(EnvCli, HelpAndBadOptions) {
   EXPECT_FALSE(fs::exists(dir_ / "y.exr"));
 }
 
+TEST_F(EnvCli, AFailingPreviewLeavesNoCubemapBehind) {
+  const fs::path out = dir_ / "cube.exr";
+  // A path below a regular file cannot be created.
+  const RunResult r = run("env cubemap \"" + exr_.string() + "\" --res 4 --out \"" + out.string() +
+                          "\" --preview \"" + (exr_ / "p.png").string() + "\"");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(fs::exists(out)) << "the cubemap was written though its preview failed";
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
+}
+
+// Radiance near float's range would overflow every relight to +Inf: refused, naming the file.
+// Large but summable radiance and a map that is not 2:1 are accepted with named warnings.
+TEST_F(EnvCli, ExtremeRadianceIsRefusedAndOddMapsWarnByName) {
+  auto write_map = [&](const std::string& name, int w, int h, float peak) {
+    RgbImage img(w, h);
+    for (Rgb& p : img.pixels) p = Rgb(0.5f);
+    img.at(w / 2, h / 4) = Rgb(peak, 1.f, 1.f);
+    write_exr(img, dir_ / name);
+    return (dir_ / name).string();
+  };
+  const std::string huge = write_map("huge.exr", 64, 32, 3.0e38f);
+  const RunResult refused = run("env info \"" + huge + "\"");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find(huge), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("overflow"), std::string::npos) << refused.err;
+
+  const RunResult bright =
+      run("env info \"" + write_map("bright.exr", 64, 32, 1e17f) + "\" --json");
+  ASSERT_EQ(bright.exit_code, 0) << bright.err;
+  EXPECT_EQ(nlohmann::json::parse(bright.out)["warnings"].value("radiance-range", 0), 1);
+  EXPECT_NE(bright.err.find("[radiance-range]"), std::string::npos) << bright.err;
+
+  const RunResult square = run("env info \"" + write_map("square.exr", 32, 32, 1.f) + "\" --json");
+  ASSERT_EQ(square.exit_code, 0) << square.err;
+  const nlohmann::json j = nlohmann::json::parse(square.out);
+  EXPECT_EQ(j["warnings"].value("latlong-aspect", 0), 1);
+  EXPECT_EQ(j["aspect_2_to_1"], false);
+  const RunResult plain = run("env info \"" + exr_.string() + "\" --json");
+  EXPECT_TRUE(nlohmann::json::parse(plain.out)["warnings"].empty()) << plain.out;
+}
+
+TEST_F(EnvCli, AnUnknownCommandIsNamed) {
+  const RunResult top = run("fooo");
+  EXPECT_NE(top.exit_code, 0);
+  EXPECT_NE(top.err.find("unknown command 'fooo'"), std::string::npos) << top.err;
+  EXPECT_NE(top.err.find("render"), std::string::npos) << "the commands are listed: " << top.err;
+  const RunResult sub = run("env cubmap x.exr");
+  EXPECT_NE(sub.exit_code, 0);
+  EXPECT_NE(sub.err.find("unknown command 'cubmap' for 'prtlab env'"), std::string::npos)
+      << sub.err;
+  EXPECT_NE(sub.err.find("cubemap"), std::string::npos) << sub.err;
+}
+
 }  // namespace
 }  // namespace prt

@@ -144,19 +144,6 @@ bool bit_identical(const LocalRadiance& a, const LocalRadiance& b) {
 
 // sum |a - ref| / sum |ref| over all rows and channels: the norm of the lossy bicluster bound
 // (for T, L >= 0 a per-column L1 budget bounds it; see CompressedTransfer::ErrorNorm).
-double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference) {
-  PRT_CHECK(a.values.size() == reference.values.size(), "sizes {} vs {}", a.values.size(),
-            reference.values.size());
-  double diff = 0, ref = 0;
-  for (std::size_t i = 0; i < a.values.size(); ++i) {
-    for (int c = 0; c < 3; ++c) {
-      diff += std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]);
-      ref += std::abs(static_cast<double>(reference.values[i][c]));
-    }
-  }
-  return ref > 0 ? diff / ref : diff;
-}
-
 // The error in the norm the backend declares its bound in.
 double declared_norm_error(const CompressedTransfer& ct, const LocalRadiance& a,
                            const LocalRadiance& reference) {

@@ -3,12 +3,17 @@
 #include "prtlab/image/image_io.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -86,6 +91,60 @@ TEST(Exr, ErrorsNameTheFile) {
   write_exr(img, dir / "file.exr");
   EXPECT_THROW(write_exr(img, dir / "file.exr" / "sub.exr"), InputError);
   EXPECT_THROW(write_exr(RgbImage{}, dir / "empty.exr"), ParameterError);
+  fs::remove_all(dir);
+}
+
+// Reading decodes in strips of rows: a tall image (several strips, the last one partial) comes
+// back bit for bit, tiled or not.
+TEST(Exr, ImagesOfManyStripsRoundTrip) {
+  const fs::path dir = temp_dir("exr_strips");
+  RgbImage img(19, 150);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i)
+    img.pixels[i] = Rgb(static_cast<float>(i), 0.5f * static_cast<float>(i % 7), -1.0f);
+  write_exr(img, dir / "tall.exr");
+  const RgbImage back = read_exr(dir / "tall.exr");
+  ASSERT_EQ(back.pixels.size(), img.pixels.size());
+  EXPECT_EQ(std::memcmp(back.pixels.data(), img.pixels.data(), img.pixels.size() * sizeof(Rgb)), 0);
+  fs::remove_all(dir);
+}
+
+// A header may declare any size. A file of a few KB declaring 20000 x 10000 pixels (2.4 GB as
+// float RGB) must fail without touching memory of that size: measured as the peak resident size
+// of a child process that reads it.
+TEST(Exr, AHeaderDeclaringAHugeImageFailsWithoutAllocatingIt) {
+  const fs::path dir = temp_dir("exr_huge");
+  write_exr(RgbImage(64, 32), dir / "small.exr");
+  std::string bytes;
+  {
+    std::ifstream in(dir / "small.exr", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string key("dataWindow\0box2i\0", 17);
+  const auto at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const std::int32_t window[4] = {0, 0, 19999, 9999};
+  std::memcpy(bytes.data() + at + key.size() + 4, window, sizeof(window));
+  std::ofstream(dir / "huge.exr", std::ios::binary) << bytes;
+
+  const pid_t child = ::fork();
+  if (child == 0) {
+    int code = 0;
+    try {
+      (void)read_exr(dir / "huge.exr");
+      code = 2;  // read: not what a 4 KB file can hold
+    } catch (const InputError&) {
+    } catch (...) {
+      code = 3;
+    }
+    rusage usage{};
+    ::getrusage(RUSAGE_SELF, &usage);
+    if (code == 0 && usage.ru_maxrss > 512 * 1024) code = 4;  // ru_maxrss is in KB
+    ::_exit(code);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: read, 3: not an InputError, 4: peak RSS above 512 MB";
   fs::remove_all(dir);
 }
 

@@ -4,7 +4,9 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <stdlib.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -17,6 +19,8 @@
 #include <vector>
 
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/storage/atomic_file.h"
 
 namespace prt {
 namespace {
@@ -240,6 +244,115 @@ TEST_F(StageCacheTest, ErrorsOfAFreshComputationPropagate) {
   // A load that refuses what compute just produced is a bug in the stage, not a cache problem.
   const auto wrong_load = [](const ArchiveReader& r) { return r.section<double>("values"); };
   EXPECT_THROW((void)cache.get_or_compute("stage", key(2), compute(2), wrong_load), InputError);
+}
+
+// A process id that ran and has exited (and been reaped): nothing runs under it now.
+long dead_pid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return static_cast<long>(child);
+}
+
+void touch(const fs::path& p) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p) << "half an archive";
+}
+
+// A warning of the computation is stored with its result and issued again on every hit: a
+// cached result must not be quieter than a computed one.
+TEST_F(StageCacheTest, AComputationsNamedWarningsAreIssuedAgainOnAHit) {
+  StageCache cache(root_);
+  const auto warning = [this] {
+    log_named_warning("test-stage-warning", "the fit was regularised");
+    return compute(1)();
+  };
+  const int before = warning_count("test-stage-warning");
+  (void)cache.get_or_compute("stage", key(1), warning, load);
+  EXPECT_EQ(warning_count("test-stage-warning"), before + 1);
+  const std::size_t mark = named_warning_mark();
+  (void)cache.get_or_compute("stage", key(1), warning, load);
+  EXPECT_EQ(computed_, 1) << "the second call is a hit";
+  EXPECT_EQ(warning_count("test-stage-warning"), before + 2);
+  const auto again = named_warnings_since(mark);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].name, "test-stage-warning");
+  EXPECT_NE(again[0].message.find("the fit was regularised (from the stage cache)"),
+            std::string::npos)
+      << again[0].message;
+  // A computation that warned nothing stays quiet on a hit.
+  (void)cache.get_or_compute("stage", key(2), compute(2), load);
+  const std::size_t quiet = named_warning_mark();
+  (void)cache.get_or_compute("stage", key(2), compute(2), load);
+  EXPECT_TRUE(named_warnings_since(quiet).empty());
+}
+
+TEST_F(StageCacheTest, TemporariesOfKilledProcessesAreRemovedOnFirstUse) {
+  StageCache cache(root_);
+  const fs::path dir = cache.path_for("stage", key(1)).parent_path();
+  const long gone = dead_pid();
+  const fs::path stale = dir / fmt::format("0123abcd.prt.tmp.{}.0", gone);
+  const fs::path live = dir / fmt::format("4567abcd.prt.tmp.{}.3", static_cast<long>(::getppid()));
+  const fs::path other = dir / "notes.tmp.txt";  // not a name prtlab makes
+  touch(stale);
+  touch(live);
+  touch(other);
+  (void)cache.get_or_compute("stage", key(1), compute(1), load);
+  EXPECT_FALSE(fs::exists(stale)) << "a temporary of process " << gone << " was left";
+  EXPECT_TRUE(fs::exists(live)) << "a running process's temporary was removed";
+  EXPECT_TRUE(fs::exists(other));
+}
+
+TEST(AtomicFile, TemporaryNamesAreRecognisedExactly) {
+  long pid = 0;
+  EXPECT_TRUE(is_atomic_temporary_name("a.prt.tmp.123.4", &pid));
+  EXPECT_EQ(pid, 123);
+  for (const char* name : {"a.prt", "a.prt.tmp.123", "a.prt.tmp.x.4", "a.prt.tmp.12.4x", ".tmp.1.2",
+                           "a.prt.tmp..4", "a.prt.tmp.1.", "a.tmp.1.2.extra"})
+    EXPECT_FALSE(is_atomic_temporary_name(name)) << name;
+}
+
+TEST(AtomicFile, AWriteRemovesTheStaleTemporariesOfItsDestination) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("prtlab_atomic_{}", ::getpid());
+  fs::remove_all(dir);
+  const long gone = dead_pid();
+  const fs::path mine = dir / fmt::format("out.json.tmp.{}.7", gone);
+  const fs::path others = dir / fmt::format("other.json.tmp.{}.7", gone);
+  touch(mine);
+  touch(others);
+  write_text_atomically(dir / "out.json", "{}");
+  EXPECT_FALSE(fs::exists(mine));
+  EXPECT_TRUE(fs::exists(others)) << "only the destination's own temporaries are swept on write";
+  EXPECT_EQ(remove_stale_temporaries(dir), 1u);
+  EXPECT_FALSE(fs::exists(others));
+  fs::remove_all(dir);
+}
+
+// SIGTERM (and SIGINT) in the middle of a write: the process still dies of the signal, and the
+// temporary it was writing is gone.
+TEST(AtomicFile, ATerminatedWriteLeavesNoTemporary) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("prtlab_atomic_sig_{}", ::getpid());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (int sig : {SIGTERM, SIGINT}) {
+    const pid_t child = ::fork();
+    if (child == 0) {
+      remove_temporaries_on_signal();
+      write_file_atomically(dir / "big.prt", [&](const fs::path& tmp) {
+        std::ofstream(tmp) << "partial";
+        ::raise(sig);
+      });
+      ::_exit(0);  // not reached: the signal ends the process
+    }
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+    EXPECT_TRUE(left.empty()) << "left behind: " << left.front();
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -81,6 +81,10 @@ TEST_F(ExperimentCli, AllQuickRunsEveryExperimentAndThenSkipsTheCompleteOnes) {
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.err.find("fig6-quick is complete"), std::string::npos) << again.err;
   EXPECT_NE(again.err.find("btf-table-quick is complete"), std::string::npos) << again.err;
+  // The stability suite, its own kind too.
+  EXPECT_TRUE(fs::exists(out / "stability-quick" / ".complete"));
+  EXPECT_TRUE(fs::exists(out / "stability-quick" / "cases.csv"));
+  EXPECT_NE(again.err.find("stability-quick is complete"), std::string::npos) << again.err;
 
   const auto list = run_cli("experiment list --json", dir_, env_);
   ASSERT_EQ(list.exit_code, 0) << list.err;

@@ -21,6 +21,7 @@
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/geometry/scene.h"
 #include "prtlab/storage/data_paths.h"
+#include "stability_suite.h"
 #include "support/temp_dir.h"
 
 namespace prt::experiments {
@@ -439,10 +440,16 @@ TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {
       EXPECT_NO_THROW(check_material_table(f, "")) << f;
       continue;
     }
+    if (is_stability_suite(f)) {  // its own kind too (stability_suite.h)
+      for (const auto& v : stability_suite_variants(f))
+        EXPECT_NO_THROW(check_stability_suite(f, v)) << f;
+      EXPECT_NO_THROW(check_stability_suite(f, "")) << f;
+      continue;
+    }
     for (const auto& v : experiment_variants(f)) EXPECT_NO_THROW((void)parse(f, v)) << f;
     EXPECT_NO_THROW((void)parse(f)) << f;
   }
-  for (const char* n : {"fig6", "fig8", "pareto", "btf-table"})
+  for (const char* n : {"fig6", "fig8", "pareto", "btf-table", "stability"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 

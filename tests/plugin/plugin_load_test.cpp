@@ -303,6 +303,22 @@ TEST(PluginCli, ListShowsThePluginBackendWhereverTheOptionStands) {
   EXPECT_EQ(find_backend(nlohmann::json::parse(without.out), "quantized8"), nullptr);
 }
 
+// dlopen() reads a name without a slash as a library to search for on the library path; prtlab
+// reads it as every other file argument, relative to the working directory.
+TEST(PluginCli, ABareFileNameIsTheFileInTheWorkingDirectory) {
+  ASSERT_TRUE(fs::exists(kTemplatePlugin)) << kTemplatePlugin;
+  const fs::path dir = g_scratch / "bare-name";
+  fs::create_directories(dir);
+  fs::copy_file(kTemplatePlugin, dir / "q8.so", fs::copy_options::overwrite_existing);
+  const fs::path out = g_scratch / "stdout.txt", err = g_scratch / "stderr.txt";
+  const std::string cmd = "cd \"" + dir.string() + "\" && \"" + PRTLAB_CLI_PATH +
+                          "\" list --json --plugin q8.so >\"" + out.string() + "\" 2>\"" +
+                          err.string() + "\"";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(err);
+  EXPECT_NE(find_backend(nlohmann::json::parse(slurp(out)), "quantized8"), nullptr);
+}
+
 TEST(PluginCli, AMismatchedPluginStopsTheCommandWithTheReason) {
   ASSERT_TRUE(fs::exists(kWrongApiPlugin)) << kWrongApiPlugin;
   const RunResult r = run_cli("list --plugin \"" + kWrongApiPlugin.string() + "\"");

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "support/sphere_over_plane.h"
 #include "prtlab/base/progress.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/geometry/procedural_shapes.h"
@@ -112,17 +113,7 @@ json write_transfer(const prt::TransferResult& result, const fs::path& file) {
 }
 
 prt::TransferResult sphere_over_plane(int sh_order) {
-  prt::Mesh mesh = prt::make_plane(3.0, 3.0, 4);
-  prt::Mesh sphere = prt::make_sphere(0.5, 12, 6);
-  for (auto& p : sphere.positions) p += prt::Vec3(0.2f, 0.8f, -0.1f);
-  mesh.append(sphere, 1);
-  prt::TransferParams params;
-  params.cubemap_resolution = 8;
-  params.local_grid = 4;
-  params.supersampling = 2;
-  params.sh_order = sh_order;
-  params.show_progress = false;
-  return prt::compute_transfer(mesh, params);
+  return prt::testing::sphere_over_plane_transfer(sh_order);
 }
 
 json write_element_types(const fs::path& file) {

@@ -39,6 +39,7 @@
 #include "prtlab/transfer/random_transfer.h"
 #include "prtlab/transfer/sh_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "support/sphere_over_plane.h"
 
 namespace prt::conformance {
 
@@ -129,19 +130,7 @@ inline std::vector<Cubemap> test_lights(int resolution, std::uint64_t seed) {
   return {std::move(random), std::move(hdr)};
 }
 
-inline TransferResult sphere_over_plane_transfer(int sh_order = 0) {
-  Mesh mesh = make_plane(3.0, 3.0, 4);
-  Mesh sphere = make_sphere(0.5, 12, 6);
-  for (auto& p : sphere.positions) p += Vec3(0.2f, 0.8f, -0.1f);
-  mesh.append(sphere, 1);
-  TransferParams params;
-  params.cubemap_resolution = 8;
-  params.local_grid = 4;
-  params.supersampling = 2;
-  params.sh_order = sh_order;
-  params.show_progress = false;
-  return compute_transfer(mesh, params);
-}
+using prt::testing::sphere_over_plane_transfer;
 
 struct CaseSpec {
   std::string name;

@@ -12,10 +12,12 @@
 #include <random>
 
 #include "bicluster/bicluster.h"
-#include "prtlab/storage/archive.h"
-#include "prtlab/opencl/cl_context.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/compress/backend_evaluation.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
@@ -179,7 +181,10 @@ std::unique_ptr<CompressedTransfer> save_and_load(const BiclusterArrays& a) {
 
 TEST(BiclusterLayout, SaveLoadKeepsTheArraysAndTheLoaderRefusesInconsistentOnes) {
   const Fixture f = many_biclusters();
-  const BiclusterArrays a = pack(f.b, f.t);
+  BiclusterArrays a = pack(f.b, f.t);
+  // The fixture's biclusters come on top of every entry of T, so its sum is not a matrix of
+  // sample counts: saved as lossy, only the structural checks below apply to it.
+  a.error = a.bound = 0.5;
   const auto loaded = save_and_load(a);
   const BiclusterArrays& l = dynamic_cast<const BiclusterTransfer&>(*loaded).arrays();
   EXPECT_EQ(l.bic_col_offsets, a.bic_col_offsets);
@@ -212,6 +217,58 @@ TEST(BiclusterLayout, SaveLoadKeepsTheArraysAndTheLoaderRefusesInconsistentOnes)
   BiclusterArrays slot = a;  // zero slot 0 takes bicluster 1's columns
   slot.bic_col_offsets[1] = slot.bic_col_offsets[2];
   EXPECT_THROW(save_and_load(slot), InputError);
+}
+
+// A damaged archive with valid checksums: the arrays are changed and then saved, so only the
+// lossless loader's own checks can refuse them; and a result that does not reproduce T, built
+// in memory where no loader sees it, is an error of the evaluation, not a reported number.
+TEST(BiclusterLayout, ALosslessArchiveThatIsNotTsCountsIsRefused) {
+  const TransferMatrix t = random_transfer(5, RandomTransferSpec{60, 4, 4, 2, 0.6, {}});
+  const auto ct =
+      CompressorRegistry::instance()
+          .create("bicluster", {{"seed", "2"}})
+          ->compress({t, nullptr, CubemapLayout(4), HemisphereGrid(4)}, Progress::null());
+  const BiclusterArrays& a = dynamic_cast<const BiclusterTransfer&>(*ct).arrays();
+  ASSERT_EQ(a.bound, 0.0);
+  ASSERT_NO_THROW(save_and_load(a));
+  std::size_t wide = 0;  // a bicluster with two columns or more
+  while (wide < a.bicluster_count() && a.bic_col_offsets[wide + 1] - a.bic_col_offsets[wide] < 2)
+    ++wide;
+  ASSERT_LT(wide, a.bicluster_count()) << "the search found no bicluster of two columns";
+  const std::uint32_t q = a.bic_col_offsets[wide];
+
+  auto refused = [](const BiclusterArrays& damaged, const std::string& needle) {
+    try {
+      save_and_load(damaged);
+      return ::testing::AssertionFailure() << "loaded";
+    } catch (const InputError& e) {
+      if (std::string(e.what()).find(needle) == std::string::npos)
+        return ::testing::AssertionFailure() << e.what();
+      return ::testing::AssertionSuccess();
+    }
+  };
+  BiclusterArrays swapped = a;
+  std::swap(swapped.bic_columns[q], swapped.bic_columns[q + 1]);
+  EXPECT_TRUE(refused(swapped, "not increasing"));
+
+  BiclusterArrays extreme = a;
+  extreme.bic_constants[q] = 30000;
+  EXPECT_TRUE(refused(extreme, "not a lossless transfer"));
+
+  BiclusterArrays negative = a;
+  negative.bic_constants[q] = static_cast<std::int16_t>(-negative.bic_constants[q] - 8);
+  EXPECT_TRUE(refused(negative, "not a lossless transfer"));
+
+  BiclusterArrays zero = a;
+  zero.bic_constants[q] = 0;
+  EXPECT_TRUE(refused(zero, "constant 0"));
+
+  // In memory (no loader): the evaluation measures it against T and refuses to report it.
+  const BiclusterTransfer wrong(extreme);
+  const std::vector<EvaluationLight> lights = {
+      {"sunsky", evaluation_lights(4, 1).front().radiance}};
+  EXPECT_THROW((void)evaluate_backend(wrong, t, lights, nullptr, {.repeats = 1}), NumericalError);
+  EXPECT_NO_THROW((void)evaluate_backend(*ct, t, lights, nullptr, {.repeats = 1}));
 }
 
 }  // namespace

@@ -139,6 +139,19 @@ Btf::Btf(std::string material, int resolution, int view_side, int light_side,
     throw ParameterError(fmt::format("BTF '{}': {} values given, {} x {} x {} x 3 = {} expected",
                                      material_, rgb_.size(), texel_count(), view_count(),
                                      light_count(), expected));
+  // A NaN or Inf reflectance turns every pixel that touches its texel into NaN, and every
+  // compressor's fit of it with it: refused here, where every BTF is built, not per backend.
+  if (const auto bad =
+          std::find_if(rgb_.begin(), rgb_.end(), [](float x) { return !std::isfinite(x); });
+      bad != rgb_.end()) {
+    const std::size_t i = static_cast<std::size_t>(bad - rgb_.begin()) / 3;
+    const std::size_t m = static_cast<std::size_t>(light_count());
+    const std::size_t v = static_cast<std::size_t>(view_count());
+    throw ParameterError(
+        fmt::format("BTF '{}': a non-finite value ({}) at texel {}, view {}, "
+                    "light {}",
+                    material_, *bad, i / m / v, i / m % v, i % m));
+  }
   // Bitwise comparison: a Lambertian BTF computes the same float for every view, and anything
   // looser would let the skip change a view-dependent image.
   const std::size_t block = static_cast<std::size_t>(light_count()) * 3;
@@ -356,7 +369,11 @@ Btf load_btf(const ArchiveReader& reader) {
                                                     name, side));
   }
   const std::uint64_t count = static_cast<std::uint64_t>(u) * u * vs * vs * ls * ls * 3;
-  return Btf(material, u, vs, ls, reader.section<float>("rgb", count), std::move(params));
+  try {
+    return Btf(material, u, vs, ls, reader.section<float>("rgb", count), std::move(params));
+  } catch (const ParameterError& e) {
+    throw InputError(reader.path(), e.what());
+  }
 }
 
 void write_btf(const Btf& btf, const std::filesystem::path& file) {

@@ -15,6 +15,32 @@ namespace prt {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// A BTF file is relative to the scene file's folder.
+fs::path scene_btf_file(const SceneDesc& desc, const ScenePart& part) {
+  fs::path file = part.btf;
+  if (file.is_relative() && !desc.file.empty()) file = desc.file.parent_path() / file;
+  return file;
+}
+
+void check_btf_name(const SceneDesc& desc, const ScenePart& part) {
+  if (is_btf_material(part.btf)) return;
+  const fs::path file = scene_btf_file(desc, part);
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw InputError(desc.file, fmt::format("part '{}': btf '{}' is neither a BTF material "
+                                            "({}) nor a file ({} does not exist)",
+                                            part.name, part.btf,
+                                            fmt::join(btf_material_names(), ", "), file.string()));
+}
+
+}  // namespace
+
+void check_scene_btf_names(const SceneDesc& desc) {
+  for (const ScenePart& part : desc.parts) check_btf_name(desc, part);
+}
+
 std::vector<std::shared_ptr<const Btf>> scene_part_btfs(const SceneDesc& desc, BtfParams params,
                                                         StageCache& cache, bool show_progress,
                                                         int* cache_hits) {
@@ -28,15 +54,16 @@ std::vector<std::shared_ptr<const Btf>> scene_part_btfs(const SceneDesc& desc, B
       // A BTF file (a measured one from `prtlab btf import`, or any written BTF), relative to
       // the scene file's folder: it is used at its own texels and views, but its lights must
       // be the scene's local grid, which shading indexes.
-      fs::path file = part.btf;
-      if (file.is_relative() && !desc.file.empty()) file = desc.file.parent_path() / file;
-      if (!fs::exists(file))
-        throw InputError(
-            desc.file,
-            fmt::format("part '{}': btf '{}' is neither a BTF material "
-                        "({}) nor a file ({} does not exist)",
-                        part.name, part.btf, fmt::join(btf_material_names(), ", "), file.string()));
-      auto btf = std::make_shared<const Btf>(read_btf(file));
+      check_btf_name(desc, part);
+      const fs::path file = scene_btf_file(desc, part);
+      std::shared_ptr<const Btf> btf;
+      try {
+        btf = std::make_shared<const Btf>(read_btf(file));
+      } catch (const Error& e) {
+        // The BTF file's own error names it; the scene file is where the user chose it.
+        throw InputError(desc.file,
+                         fmt::format("part '{}': btf '{}': {}", part.name, part.btf, e.what()));
+      }
       if (btf->light_side() != desc.local_grid)
         throw InputError(file, fmt::format("its light side is {}, the scene's local grid is {} "
                                            "(import it with --light-side {})",

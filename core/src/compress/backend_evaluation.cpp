@@ -7,6 +7,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/lighting/environment_map.h"
@@ -58,6 +59,41 @@ std::vector<EvaluationLight> evaluation_lights(int resolution, int limit) {
   return out;
 }
 
+void check_within_declared_bound(const CompressedTransfer& ct, const LocalRadiance& approx,
+                                 const LocalRadiance& exact, const std::string& light) {
+  if (const std::size_t bad = count_nonfinite(approx.values))
+    throw NumericalError(fmt::format(
+        "backend '{}': relighting with light '{}' produced {} non-finite values of {} (the "
+        "compressed data or the light overflows float)",
+        ct.backend(), light, bad, approx.values.size()));
+  if (const std::size_t bad = count_nonfinite(exact.values))
+    throw NumericalError(
+        fmt::format("the exact relight with light '{}' has {} non-finite values "
+                    "(beyond float's range: the light is too bright to relight in float)",
+                    light, bad));
+  const double bound = ct.declared_error_bound();
+  const bool l1 = ct.declared_error_norm() == CompressedTransfer::ErrorNorm::kRelativeL1;
+  const double measured = l1 ? relative_l1_error(approx, exact) : relative_l2_error(approx, exact);
+  if (!std::isfinite(bound)) {
+    // No bound to hold it to, but an approximation farther from T L than zero is a failed fit.
+    if (measured > 1.0)
+      log_warn_named("error-above-one",
+                     "backend '{}': the {} error with light '{}' is {:.3g}, worse than "
+                     "relighting to zero (a failed fit: check its parameters)",
+                     ct.backend(), to_string(ct.declared_error_norm()), light, measured);
+    return;
+  }
+  if (measured <= bound * (1 + 1e-6) + kFloatRoundingTolerance) return;
+  throw NumericalError(fmt::format(
+      "backend '{}': the {} error with light '{}' is {:.3e}, above the bound of {:.3e} it "
+      "declares{}: the compressed data is inconsistent with the transfer it was made from (a "
+      "damaged or foreign archive, or a bug in the backend)",
+      ct.backend(), to_string(ct.declared_error_norm()), light, measured, bound,
+      bound == 0
+          ? fmt::format(" (lossless, plus {:.0e} for float rounding)", kFloatRoundingTolerance)
+          : ""));
+}
+
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
                                    const EvaluationOptions& options) {
@@ -71,6 +107,7 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
     ct.relight(coeffs, out);
     const LocalRadiance pixel = to_pixel_basis(out, grid);
     const LocalRadiance ref = exact_double(exact, light.radiance);
+    check_within_declared_bound(ct, pixel, ref, light.name);
     ev.errors.push_back(
         {light.name, relative_l2_error(pixel, ref), max_relative_error(pixel, ref)});
     const VertexError v = max_vertex_error(pixel, ref, grid);

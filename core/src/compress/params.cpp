@@ -127,8 +127,9 @@ ParamSet::ParamSet(std::string owner, std::span<const ParamSpec> specs,
     values_[s.key] = parse_value(owner_ + " (default)", s, s.default_value);
   }
   for (const auto& [key, text] : given) {
-    auto it =
-        std::find_if(all.begin(), all.end(), [&](const ParamSpec& s) { return s.key == key; });
+    // Named capture: clang before 16 cannot capture a structured binding (the fuzz preset).
+    auto it = std::find_if(all.begin(), all.end(),
+                           [&name = key](const ParamSpec& s) { return s.key == name; });
     if (it == all.end())
       throw ParameterError(fmt::format("{}: unknown parameter '{}'. Valid parameters:{}", owner_,
                                        key, list_specs(specs)));

@@ -76,7 +76,10 @@ std::vector<std::string> load_plugin(const std::filesystem::path& library) {
 
   PluginLoad load{library.string(), {}, {}};
   g_loading = &load;
-  void* handle = ::dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  // The canonical (absolute) path, because dlopen() searches the library path, not the working
+  // directory, for a name without a slash: `--plugin q8.so` must mean ./q8.so, as it does for
+  // every other file argument.
+  void* handle = ::dlopen(canonical.c_str(), RTLD_NOW | RTLD_LOCAL);
   g_loading = nullptr;
   if (!handle) throw InputError(library, fmt::format("cannot load plugin: {}", ::dlerror()));
 

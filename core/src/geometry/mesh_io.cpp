@@ -21,6 +21,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/storage/atomic_file.h"
 
 namespace prt {
@@ -199,10 +200,14 @@ Mesh read_off(const fs::path& file, std::string_view text) {
   };
 
   Mesh mesh;
-  mesh.positions.resize(V);
-  if (has_uv) mesh.uvs.resize(V);
   const std::size_t ncoords = homogeneous ? 4 : 3;
   const std::size_t nvalues = ncoords + (has_normal ? 3 : 0) + (has_uv ? 2 : 0);
+  // The counts are not trusted with memory: a 20-byte file may declare four billion vertices
+  // and only fail as truncated once read. A vertex line takes at least two bytes per value and
+  // a face line four, so the file's size bounds what can really be there.
+  const std::size_t vertex_room = std::min(V, text.size() / (2 * nvalues) + 1);
+  mesh.positions.reserve(vertex_room);
+  if (has_uv) mesh.uvs.reserve(vertex_room);
   for (std::size_t i = 0; i < V; ++i) {
     if (!reader.next(line))
       throw truncated(fmt::format("after {} vert{}", i, i == 1 ? "ex" : "ices"));
@@ -229,8 +234,8 @@ Mesh read_off(const fs::path& file, std::string_view text) {
     if (const std::string problem = non_finite_problem({c[0], c[1], c[2]}, "coordinate");
         !problem.empty())
       throw InputError(file, fmt::format("vertex {} (line {}) {}", i, line.number, problem));
-    mesh.positions[i] =
-        Vec3(static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]));
+    mesh.positions.emplace_back(static_cast<float>(c[0]), static_cast<float>(c[1]),
+                                static_cast<float>(c[2]));
     if (has_uv) {
       // Texture coordinates come last on the line (after optional colours of varying count).
       const std::size_t n = line.tokens.size();
@@ -243,11 +248,11 @@ Mesh read_off(const fs::path& file, std::string_view text) {
       if (const std::string problem = non_finite_problem({*u, *v}, "texture coordinate");
           !problem.empty())
         throw InputError(file, fmt::format("vertex {} (line {}) {}", i, line.number, problem));
-      mesh.uvs[i] = Vec2(static_cast<float>(*u), static_cast<float>(*v));
+      mesh.uvs.emplace_back(static_cast<float>(*u), static_cast<float>(*v));
     }
   }
 
-  mesh.indices.reserve(3 * F);
+  mesh.indices.reserve(3 * std::min(F, text.size() / 4 + 1));
   std::vector<std::uint32_t> face;
   for (std::size_t f = 0; f < F; ++f) {
     if (!reader.next(line))
@@ -365,6 +370,31 @@ void prescan_obj(const fs::path& file, std::string_view text) {
       }
     }
   }
+}
+
+// ---- PLY pre-check ---------------------------------------------------------------------------
+// assimp 5.2's PLY reader does not return on a header that lacks its 'end_header' line (a hang
+// found by fuzzing, tests/fuzz/regressions/mesh/), so a file that starts as a PLY header must
+// have that line. Anything else is left to assimp, which refuses it quickly.
+
+void prescan_ply(const fs::path& file, std::string_view text) {
+  std::size_t start = 0;
+  while (start < text.size() && std::isspace(static_cast<unsigned char>(text[start]))) ++start;
+  if (text.size() - start < 3) return;
+  std::string magic(text.substr(start, 3));
+  for (char& c : magic) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (magic != "ply") return;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view line = text.substr(pos, end - pos);
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+      line.remove_suffix(1);
+    if (line == "end_header") return;
+    pos = end + 1;
+  }
+  throw InputError(file, "the PLY header has no 'end_header' line (truncated, or not a PLY file)");
 }
 
 // ---- assimp ---------------------------------------------------------------------------------
@@ -583,7 +613,8 @@ void validate_mesh(Mesh& mesh, const fs::path& source, MeshLoadReport* report) {
   if (dropped > 0) {
     mesh.indices.resize(3 * kept);
     if (!mesh.triangle_part.empty()) mesh.triangle_part.resize(kept);
-    log_warn(
+    log_warn_named(
+        "degenerate-triangles",
         "{}: dropped {} degenerate triangle{} (repeated vertex or zero area); the first is "
         "triangle {}",
         source.string(), dropped, dropped == 1 ? "" : "s", first);
@@ -619,6 +650,8 @@ GroupedMesh load_mesh_groups(const fs::path& file, MeshGroupKey key, MeshLoadRep
     throw InputError(file, "an OFF file has no material or object groups to select from");
   if (ext == ".obj") {
     prescan_obj(file, read_whole_file(file));
+  } else if (ext == ".ply") {
+    prescan_ply(file, read_whole_file(file));
   } else {
     std::error_code ec;
     if (!fs::exists(file, ec)) throw InputError(file, "file not found");
@@ -641,6 +674,8 @@ Mesh load_mesh(const fs::path& file, MeshLoadReport* report) {
   } else {
     if (ext == ".obj") {
       prescan_obj(file, read_whole_file(file));
+    } else if (ext == ".ply") {
+      prescan_ply(file, read_whole_file(file));
     } else {
       std::error_code ec;
       if (!fs::exists(file, ec)) throw InputError(file, "file not found");

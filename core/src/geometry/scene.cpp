@@ -71,9 +71,38 @@ Vec3d vec3(const fs::path& file, const toml::node_view<const toml::node>& node,
   for (int i = 0; i < 3; ++i) {
     auto v = (*arr)[static_cast<std::size_t>(i)].value<double>();
     if (!v) throw InputError(file, fmt::format("key '{}' must hold numbers", key));
+    if (!std::isfinite(*v))
+      throw InputError(file, fmt::format("line {}: key '{}' holds {} (numbers must be finite)",
+                                         node.node()->source().begin.line, key, *v));
     out[i] = *v;
   }
   return out;
+}
+
+// Subdivision reaches any target, so an unbounded one runs until memory runs out; the transfer
+// matrix of the largest allowed mesh (64 lights per vertex, a few hundred non-zeros each) is
+// already tens of GB.
+constexpr std::int64_t kMaxTargetVertices = 10'000'000;
+
+void check_target_vertices(const fs::path& file, const std::string& part, std::int64_t tv) {
+  const std::string where = part.empty() ? "" : fmt::format("part '{}': ", part);
+  if (tv < 4)
+    throw InputError(file,
+                     fmt::format("{}target_vertices = {} is too small (at least 4)", where, tv));
+  if (tv > kMaxTargetVertices)
+    throw InputError(file, fmt::format("{}target_vertices = {} is too large (at most {})", where,
+                                       tv, kMaxTargetVertices));
+}
+
+// A zero scale flattens the part to a plane or a line: every normal becomes undefined, so
+// it is refused where the user wrote it, not later in the mesh pipeline.
+void require_invertible(const fs::path& file, const std::string& part, std::string_view what,
+                        const Transform& xf) {
+  const double det = glm::determinant(xf.linear());
+  if (!(std::abs(det) > 1e-300) || !std::isfinite(det))
+    throw InputError(file, fmt::format("part '{}': {} is singular (scale [{}, {}, {}]; every "
+                                       "scale component must be non-zero)",
+                                       part, what, xf.scale.x, xf.scale.y, xf.scale.z));
 }
 
 int checked_int(const fs::path& file, std::string_view key, std::int64_t v, int lo, int hi) {
@@ -282,7 +311,7 @@ SceneDesc parse_scene(const fs::path& file) {
       file, "supersampling",
       optional_value<std::int64_t>(file, r["supersampling"], "supersampling").value_or(2), 1, 15);
   if (auto tv = optional_value<std::int64_t>(file, r["target_vertices"], "target_vertices")) {
-    if (*tv < 4) throw InputError(file, fmt::format("'target_vertices' = {} is too small", *tv));
+    check_target_vertices(file, "", *tv);
     d.target_vertices = static_cast<std::size_t>(*tv);
   }
   const auto* parts = root["part"].as_array();
@@ -332,9 +361,7 @@ SceneDesc parse_scene(const fs::path& file) {
                                          part.name, mapping));
     part.normalize = optional_value<bool>(file, p["normalize"], "normalize").value_or(false);
     if (auto tv = optional_value<std::int64_t>(file, p["target_vertices"], "target_vertices")) {
-      if (*tv < 4)
-        throw InputError(
-            file, fmt::format("part '{}': target_vertices = {} is too small", part.name, *tv));
+      check_target_vertices(file, part.name, *tv);
       part.target_vertices = static_cast<std::size_t>(*tv);
     }
     const std::string subdivision =
@@ -381,6 +408,7 @@ SceneDesc parse_scene(const fs::path& file) {
     } else if (p["transform"]) {
       throw InputError(file, fmt::format("part '{}': transform must be a table", part.name));
     }
+    require_invertible(file, part.name, "transform", part.transform);
     if (const auto* params = (*t)["params"].as_table()) {
       for (const auto& [k, v] : *params) {
         auto val = v.value<double>();
@@ -400,6 +428,9 @@ SceneDesc parse_scene(const fs::path& file) {
         const toml::node_view<const toml::node> x{*it};
         part.instances.push_back({vec3(file, x["scale"], "scale", Vec3d(1.0)),
                                   vec3(file, x["translate"], "translate", Vec3d(0.0))});
+        Transform as_transform;
+        as_transform.scale = part.instances.back().scale;
+        require_invertible(file, part.name, "an instance's scale", as_transform);
       }
     } else if (p["instance"]) {
       throw InputError(file,
@@ -458,7 +489,7 @@ Scene build_scene(const SceneDesc& desc) {
       if (!part.params.empty())
         throw InputError(
             desc.file, fmt::format("part '{}': params are only for procedural meshes", part.name));
-      const fs::path file = resolve_mesh(part.mesh);
+      const fs::path file = resolve_mesh(part.mesh, desc.file);
       if (part.groups.empty()) {
         m = load_mesh(file);
       } else {

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "prtlab/storage/atomic_file.h"
 #include "prtlab/base/error.h"
+#include "prtlab/storage/atomic_file.h"
 
 #define STB_IMAGE_WRITE_STATIC
 #define STB_IMAGE_WRITE_IMPLEMENTATION
@@ -74,6 +74,9 @@ void write_exr(const RgbImage& image, const fs::path& file) {
   });
 }
 
+// 16384 x 8192, the largest lat-long maps published (1.6 GB as float RGB).
+constexpr long long kMaxExrPixels = 16384LL * 8192;
+
 RgbImage read_exr(const fs::path& file) {
   std::error_code ec;
   if (!fs::exists(file, ec)) throw InputError(file, "file not found");
@@ -83,8 +86,9 @@ RgbImage read_exr(const fs::path& file) {
     const Imath::Box2i dw = in.header().dataWindow();
     const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1;
     const long long h = static_cast<long long>(dw.max.y) - dw.min.y + 1;
-    if (w <= 0 || h <= 0 || w * h > (1LL << 28)) {
-      throw InputError(file, fmt::format("unsupported EXR data window {} x {}", w, h));
+    if (w <= 0 || h <= 0 || w * h > kMaxExrPixels) {
+      throw InputError(file, fmt::format("unsupported EXR data window {} x {} (at most {} pixels)",
+                                         w, h, kMaxExrPixels));
     }
     const Imf::ChannelList& channels = in.header().channels();
     const bool has_rgb =
@@ -98,22 +102,37 @@ RgbImage read_exr(const fs::path& file) {
       throw InputError(file, fmt::format("EXR has no R, G, B (or Y) channels; its channels are: {}",
                                          names.empty() ? "(none)" : names));
     }
-    RgbImage image(static_cast<int>(w), static_cast<int>(h));
-    char* base = reinterpret_cast<char*>(image.pixels.data());
-    const std::size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * image.width;
-    Imf::FrameBuffer fb;
-    auto slice = [&](std::size_t channel) {
-      return Imf::Slice::Make(Imf::FLOAT, base + channel * sizeof(float), dw, xs, ys);
-    };
-    if (has_rgb) {
-      fb.insert("R", slice(0));
-      fb.insert("G", slice(1));
-      fb.insert("B", slice(2));
-    } else {
-      fb.insert("Y", slice(0));
+    // Decoded in strips, the image growing as they arrive: a header can declare any size, so
+    // memory follows the pixels actually in the file, and a truncated or lying file fails at
+    // its first missing strip instead of after allocating the whole declared image.
+    RgbImage image;
+    image.width = static_cast<int>(w);
+    image.height = static_cast<int>(h);
+    constexpr long long kStripRows = 64;
+    image.pixels.reserve(static_cast<std::size_t>(std::min(w * h, w * kStripRows * 16)));
+    std::vector<Rgb> strip(static_cast<std::size_t>(w * std::min(h, kStripRows)));
+    const std::size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * static_cast<std::size_t>(w);
+    for (int y0 = dw.min.y; y0 <= dw.max.y;) {
+      const int y1 = static_cast<int>(std::min<long long>(dw.max.y, y0 + kStripRows - 1));
+      const Imath::Box2i window(Imath::V2i(dw.min.x, y0), Imath::V2i(dw.max.x, y1));
+      char* base = reinterpret_cast<char*>(strip.data());
+      Imf::FrameBuffer fb;
+      auto slice = [&](std::size_t channel) {
+        return Imf::Slice::Make(Imf::FLOAT, base + channel * sizeof(float), window, xs, ys);
+      };
+      if (has_rgb) {
+        fb.insert("R", slice(0));
+        fb.insert("G", slice(1));
+        fb.insert("B", slice(2));
+      } else {
+        fb.insert("Y", slice(0));
+      }
+      in.setFrameBuffer(fb);
+      in.readPixels(y0, y1);
+      image.pixels.insert(image.pixels.end(), strip.begin(),
+                          strip.begin() + static_cast<std::ptrdiff_t>(w * (y1 - y0 + 1)));
+      y0 = y1 + 1;
     }
-    in.setFrameBuffer(fb);
-    in.readPixels(dw.min.y, dw.max.y);
     if (!has_rgb) {
       for (Rgb& p : image.pixels) p.g = p.b = p.r;
     }

@@ -8,8 +8,9 @@
 #include <cmath>
 
 #include "prtlab/base/error.h"
-#include "prtlab/image/image_io.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/image/image_io.h"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -317,12 +318,34 @@ LatLongImage load_latlong_exr(const fs::path& file, EnvLoadReport* report) {
   if (invalid > 0) {
     // Small negatives are common in camera HDRs (noise, colour-space conversion); the most
     // negative value tells the user whether that is all it is.
-    log_warn(
+    log_warn_named(
+        "invalid-radiance",
         "{}: {} of {} texels had NaN, Inf or negative values ({} non-finite, most negative "
         "{:.3g}); set to 0",
         file.string(), invalid, out.texels.size(), nonfinite, most_negative);
   }
-  if (report) report->invalid_texels = invalid;
+  float peak = 0.f;
+  for (const Rgb& t : out.texels) peak = std::max({peak, t[0], t[1], t[2]});
+  if (peak > kRadianceLimit)
+    throw InputError(file, fmt::format("radiance up to {:.3g} is beyond what a float relight can "
+                                       "sum without overflowing (at most {:.0e}); scale the map "
+                                       "down",
+                                       peak, kRadianceLimit));
+  if (peak > kRadianceWarnLimit)
+    log_warn_named("radiance-range",
+                   "{}: radiance up to {:.3g} (above {:.0e}): float relights keep their "
+                   "relative accuracy, but squared-error sums in float may overflow",
+                   file.string(), peak, kRadianceWarnLimit);
+  const bool two_to_one = out.width == 2 * out.height;
+  if (!two_to_one)
+    log_warn_named("latlong-aspect",
+                   "{}: {} x {} is not a 2:1 lat-long map; it is stretched to cover the sphere",
+                   file.string(), out.width, out.height);
+  if (report) {
+    report->invalid_texels = invalid;
+    report->max_radiance = peak;
+    report->aspect_2_to_1 = two_to_one;
+  }
   return out;
 }
 

@@ -12,6 +12,7 @@
 
 #include "numeric/row_access.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/numeric/kmeans.h"
 #include "prtlab/numeric/row_products.h"
 #include "prtlab/numeric/truncated_pca.h"
@@ -161,6 +162,15 @@ class Engine {
       if (clusters_[c].count == 0) empty.push_back(c);
     }
     if (empty.empty()) return;
+    if (!reported_empty_) {
+      // Once per fit: an empty cluster is a sign of more clusters than distinct rows, which
+      // the user should know stores clusters that represent nothing new.
+      reported_empty_ = true;
+      log_warn_named("pca-empty-clusters",
+                     "clustered PCA: {} of {} clusters lost every row (more clusters than the "
+                     "{} rows support); each takes the worst-approximated row of a larger one",
+                     empty.size(), clusters_.size(), m_);
+    }
     std::vector<std::uint32_t> by_error(m_);
     std::iota(by_error.begin(), by_error.end(), 0u);
     const bool have_errors = errors_.size() == m_;
@@ -378,6 +388,7 @@ class Engine {
   std::vector<std::uint32_t> assignments_;
   std::vector<CpcaCluster> clusters_;
   std::vector<double> errors_;
+  bool reported_empty_ = false;
   ClusteredPca out_;
 };
 

@@ -10,6 +10,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <type_traits>
@@ -51,6 +52,14 @@ double centred_squared_norm(const A& a, std::size_t i, const Eigen::VectorXd& mu
   return stored + std::max(0.0, mu_sq - mu_stored);
 }
 
+// tbb::parallel_for over blocks of 128 rows, instantiated outside any template: clang 14 (the
+// fuzz preset) does not emit tbb's task for a lambda in apply_c<A> and the library fails to link.
+void parallel_row_blocks(std::size_t rows,
+                         const std::function<void(std::size_t, std::size_t)>& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 128),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
 // Y = C Q for a row-major block Q (n x l): row i of Y is x_i Q - mu^T Q.
 template <class A>
 RowMajorMatrixXd apply_c(const A& a, const RowMajorMatrixXd& q, const Eigen::VectorXd& mu) {
@@ -58,8 +67,8 @@ RowMajorMatrixXd apply_c(const A& a, const RowMajorMatrixXd& q, const Eigen::Vec
   RowMajorMatrixXd y(static_cast<Eigen::Index>(a.rows()), q.cols());
   const auto l = static_cast<std::size_t>(q.cols());
   const double* qd = q.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.rows(), 128), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+  parallel_row_blocks(a.rows(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i != end; ++i) {
       y.row(static_cast<Eigen::Index>(i)) = -mu_q;
       double* yi = y.data() + i * l;
       a.for_each(i, [&](std::size_t j, double x) { axpy_f64(x, qd + j * l, yi, l); });

@@ -2,19 +2,22 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <charconv>
 #include <cstdlib>
+#include <filesystem>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
-#include "prtlab/opencl/cl_error.h"
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/opencl/cl_error.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt {
 namespace {
@@ -256,13 +259,36 @@ std::optional<ClDevice> select_device(const DeviceRequest& request) {
   return std::move(e.devices[*index]);
 }
 
+namespace {
+
+bool writable_directory(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  return !ec && std::filesystem::is_directory(dir, ec) && ::access(dir.c_str(), W_OK | X_OK) == 0;
+}
+
+}  // namespace
+
 void apply_pocl_env_defaults() {
   static std::once_flag once;
   std::call_once(once, [] {
     // setenv with overwrite = 0 keeps whatever the user chose.
     ::setenv("POCL_AFFINITY", "1", 0);
-    const std::string pocl_cache = (cache_dir() / "opencl" / "pocl").string();
-    ::setenv("POCL_CACHE_DIR", pocl_cache.c_str(), 0);
+    if (const char* user = std::getenv("POCL_CACHE_DIR"); user && *user) return;
+    // PoCL refuses to start without a writable kernel cache, and the ICD loader then reports no
+    // platform at all: a read-only prtlab cache would look like a missing driver.
+    namespace fs = std::filesystem;
+    const fs::path wanted = cache_dir() / "opencl" / "pocl";
+    fs::path use = wanted;
+    if (!writable_directory(wanted)) {
+      use = fs::temp_directory_path() / fmt::format("prtlab-pocl-{}", ::getuid());
+      if (!writable_directory(use)) return;  // PoCL's own default, and its own error
+      log_warn_named("cache-not-writable",
+                     "the cache folder {} is not writable; PoCL's kernel cache uses {} instead "
+                     "(set PRTLAB_CACHE or POCL_CACHE_DIR to choose)",
+                     wanted.string(), use.string());
+    }
+    ::setenv("POCL_CACHE_DIR", use.c_str(), 0);
   });
 }
 

@@ -31,7 +31,8 @@ DeviceRadianceToBins::DeviceRadianceToBins(ClContext& context, const HemisphereG
   const std::vector<double> b = sh_cell_integrals(grid, order_of(sh_count_per_vertex));
   const std::vector<float> bf(b.begin(), b.end());
   const std::size_t m = static_cast<std::size_t>(grid.cell_count());
-  impl_ = std::make_unique<Impl>(context, vertices, vertices * m);
+  // A braced temporary moved in: clang before 16 has no parenthesised aggregate initialisation.
+  impl_ = std::make_unique<Impl>(Impl{context, vertices, vertices * m});
   KernelDefines defines;
   defines.set("PRT_WG_SIZE", kWorkGroup)
       .set("PRT_SH_COUNT", sh_count_per_vertex)

@@ -1,38 +1,166 @@
 #include "prtlab/storage/atomic_file.h"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
 #include <fstream>
+#include <vector>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
 
 namespace prt {
+namespace {
+
+// Temporaries being written, in fixed storage a signal handler can read: unlink() is
+// async-signal-safe, a std::set is not. A slot is claimed with a compare-exchange and its path
+// published before `state` turns to kReady.
+constexpr int kSlots = 64;
+constexpr std::size_t kPathBytes = 4096;
+enum SlotState : int { kFree = 0, kClaimed = 1, kReady = 2 };
+struct InFlight {
+  std::atomic<int> state{kFree};
+  char path[kPathBytes]{};
+};
+std::array<InFlight, kSlots> g_in_flight;
+
+int claim_slot(const std::filesystem::path& tmp) {
+  const std::string s = tmp.string();
+  if (s.size() + 1 > kPathBytes) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = kFree;
+    if (g_in_flight[i].state.compare_exchange_strong(expected, kClaimed)) {
+      std::memcpy(g_in_flight[i].path, s.c_str(), s.size() + 1);
+      g_in_flight[i].state.store(kReady);
+      return i;
+    }
+  }
+  return -1;  // more than kSlots writes at once: this one is cleaned up by the stale sweep only
+}
+
+void release_slot(int i) {
+  if (i >= 0) g_in_flight[i].state.store(kFree);
+}
+
+extern "C" void unlink_in_flight_and_die(int sig) {
+  for (auto& slot : g_in_flight)
+    if (slot.state.load() == kReady) ::unlink(slot.path);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+bool process_is_gone(long pid) {
+  if (pid <= 0) return false;
+  if (pid == static_cast<long>(::getpid())) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
+}  // namespace
+
+bool is_atomic_temporary_name(const std::string& filename, long* pid) {
+  const auto at = filename.rfind(".tmp.");
+  if (at == std::string::npos || at == 0) return false;
+  const char* p = filename.c_str() + at + 5;
+  const char* end = filename.c_str() + filename.size();
+  long parsed = 0;
+  auto r = std::from_chars(p, end, parsed);
+  if (r.ec != std::errc{} || r.ptr == p || r.ptr == end || *r.ptr != '.') return false;
+  unsigned long long n = 0;
+  const char* q = r.ptr + 1;
+  auto r2 = std::from_chars(q, end, n);
+  if (r2.ec != std::errc{} || r2.ptr == q || r2.ptr != end) return false;
+  if (pid) *pid = parsed;
+  return true;
+}
+
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
+                                     const std::string& only_for) {
+  namespace fs = std::filesystem;
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    long pid = 0;
+    if (!is_atomic_temporary_name(name, &pid)) continue;
+    if (!only_for.empty() && name.rfind(only_for + ".tmp.", 0) != 0) continue;
+    if (!process_is_gone(pid)) continue;
+    std::error_code rm;
+    if (fs::remove(it->path(), rm)) {
+      ++removed;
+      log_debug("removed {}, left by process {} that no longer runs", it->path().string(), pid);
+    }
+  }
+  return removed;
+}
+
+void remove_temporaries_on_signal() {
+  static std::atomic<bool> installed{false};
+  if (installed.exchange(true)) return;
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    ::sigaction(sig, nullptr, &old);
+    // A caller that ignores the signal (nohup) keeps ignoring it.
+    if (old.sa_handler == SIG_IGN) continue;
+    struct sigaction sa {};
+    sa.sa_handler = unlink_in_flight_and_die;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(sig, &sa, nullptr);
+  }
+}
+
+void write_files_atomically(std::span<const PendingFile> files) {
+  namespace fs = std::filesystem;
+  // pid + a process-wide counter: two threads writing the same path never share a temporary.
+  static std::atomic<std::uint64_t> counter{0};
+  std::vector<fs::path> tmps;
+  std::vector<int> slots;
+  auto discard = [&](std::size_t from) {
+    for (std::size_t i = from; i < tmps.size(); ++i) {
+      std::error_code ignored;
+      fs::remove(tmps[i], ignored);
+    }
+    for (int slot : slots) release_slot(slot);
+  };
+  try {
+    for (const PendingFile& f : files) {
+      if (f.path.has_parent_path()) {
+        std::error_code ec;
+        fs::create_directories(f.path.parent_path(), ec);
+        if (ec) throw InputError(f.path, fmt::format("cannot create directory: {}", ec.message()));
+      }
+      remove_stale_temporaries(f.path.has_parent_path() ? f.path.parent_path() : fs::path("."),
+                               f.path.filename().string());
+      fs::path tmp = f.path;
+      tmp += fmt::format(".tmp.{}.{}", ::getpid(), counter.fetch_add(1));
+      tmps.push_back(tmp);
+      slots.push_back(claim_slot(tmp));
+      f.write(tmp);
+    }
+  } catch (...) {
+    discard(0);
+    throw;
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    std::error_code ec;
+    fs::rename(tmps[i], files[i].path, ec);
+    if (ec) {
+      discard(i);
+      throw InputError(files[i].path,
+                       fmt::format("cannot move the finished file into place: {}", ec.message()));
+    }
+  }
+  for (int slot : slots) release_slot(slot);
+}
 
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(const std::filesystem::path& tmp)>& write) {
-  namespace fs = std::filesystem;
-  if (path.has_parent_path()) {
-    std::error_code ec;
-    fs::create_directories(path.parent_path(), ec);
-    if (ec) throw InputError(path, fmt::format("cannot create directory: {}", ec.message()));
-  }
-  // pid + a process-wide counter: two threads writing the same path never share a temporary.
-  static std::atomic<std::uint64_t> counter{0};
-  fs::path tmp = path;
-  tmp += fmt::format(".tmp.{}.{}", ::getpid(), counter.fetch_add(1));
-  try {
-    write(tmp);
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec)
-      throw InputError(path,
-                       fmt::format("cannot move the finished file into place: {}", ec.message()));
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw;
-  }
+  const PendingFile file{path, write};
+  write_files_atomically(std::span(&file, 1));
 }
 
 void write_bytes_atomically(const std::filesystem::path& path, std::span<const std::byte> bytes) {

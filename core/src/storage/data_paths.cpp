@@ -32,13 +32,35 @@ fs::path scenes_dir() {
   return env_or("PRTLAB_SCENES", fs::path(PRTLAB_SOURCE_DIR) / "scenes");
 }
 
-fs::path resolve_mesh(const std::string& name) {
-  if (fs::exists(name)) return name;
-  const fs::path p = data_dir() / "meshes" / name;
-  if (fs::exists(p)) return p;
-  throw InputError(p, fmt::format("mesh '{}' not found (not a path, and not in the data cache; "
-                                  "run scripts/setup.sh --data, or set PRTLAB_DATA)",
-                                  name));
+fs::path resolve_mesh(const std::string& name, const fs::path& scene_file) {
+  const fs::path ref(name);
+  const fs::path base = scene_file.empty() ? fs::path() : scene_file.parent_path();
+  const fs::path& blame = scene_file.empty() ? ref : scene_file;
+  std::error_code ec;
+  if (ref.is_absolute()) {
+    if (fs::is_regular_file(ref, ec)) return ref;
+    throw InputError(blame, fmt::format("mesh '{}' not found", name));
+  }
+  if (ref.has_parent_path()) {
+    const fs::path p = base / ref;
+    if (fs::is_regular_file(p, ec)) return p;
+    throw InputError(blame, fmt::format("mesh '{}' not found at {} (a relative mesh path is read "
+                                        "from the scene file's folder)",
+                                        name, p.string()));
+  }
+  // A bare name is a data-cache mesh first: a stray file of that name in the working directory
+  // (or next to the scene) must not silently replace the mesh a paper's scene names.
+  const fs::path cached = data_dir() / "meshes" / ref;
+  if (fs::is_regular_file(cached, ec)) return cached;
+  const fs::path local = base / ref;
+  if (fs::is_regular_file(local, ec)) return local;
+  throw InputError(
+      blame, fmt::format("mesh '{}' not found: not in the data cache ({}){}; run "
+                         "scripts/setup.sh --data, or set PRTLAB_DATA",
+                         name, cached.string(),
+                         scene_file.empty()
+                             ? ""
+                             : fmt::format(", nor next to the scene file ({})", local.string())));
 }
 
 fs::path resolve_envmap(const std::string& name) {

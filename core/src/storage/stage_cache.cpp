@@ -3,11 +3,14 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 
-#include "prtlab/storage/data_paths.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt {
 namespace {
@@ -44,6 +47,20 @@ std::shared_ptr<std::mutex> entry_lock(const std::filesystem::path& file) {
   return lock;
 }
 
+// Each stage folder is swept once per process for temporaries of killed processes: a sweep per
+// fetch would list the folder on every cache hit.
+void sweep_stage_folder_once(const std::filesystem::path& dir) {
+  static std::mutex mutex;
+  static std::set<std::string> swept;
+  {
+    const std::lock_guard guard(mutex);
+    if (!swept.insert(dir.string()).second) return;
+  }
+  if (const std::size_t n = remove_stale_temporaries(dir))
+    log_info("stage cache: removed {} unfinished file(s) of stopped processes in {}", n,
+             dir.string());
+}
+
 }  // namespace
 
 StageCache::StageCache() : StageCache(cache_dir()) {}
@@ -66,6 +83,7 @@ StageCache::Stats StageCache::stats() const {
 void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute& compute,
                        const Consume& consume, CacheMode mode) {
   const std::filesystem::path file = path_for(stage, key);
+  if (mode != CacheMode::kOff) sweep_stage_folder_once(file.parent_path());
   const std::shared_ptr<std::mutex> lock = entry_lock(file);
   const std::lock_guard guard(*lock);
   if (mode == CacheMode::kUse && contains(stage, key)) {
@@ -79,6 +97,12 @@ void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute
         throw InputError(file, "its stage/key metadata does not match its name");
       consume(reader);
       ++hits_;
+      // What computing it warned, said again: a cached result is never quieter.
+      if (const auto w = it->find("warnings"); w != it->end() && w->is_array())
+        for (const auto& e : *w)
+          if (e.is_object())
+            log_named_warning(e.value("name", std::string("cached")),
+                              e.value("message", std::string()) + " (from the stage cache)");
       log_debug("stage '{}': cache hit {}", stage, file.string());
       return;
     } catch (const InputError& e) {
@@ -90,8 +114,14 @@ void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute
   ++misses_;
   log_debug("stage '{}': computing ({})", stage,
             mode == CacheMode::kOff ? "cache off" : file.string());
+  const std::size_t mark = named_warning_mark();
   ArchiveWriter writer = compute();
-  writer.add_meta(kMetaKey, {{"stage", stage}, {"key", key.hex()}});
+  nlohmann::json warnings = nlohmann::json::array();
+  for (const NamedWarning& w : named_warnings_since(mark))
+    warnings.push_back({{"name", w.name}, {"message", w.message}});
+  nlohmann::json meta = {{"stage", stage}, {"key", key.hex()}};
+  if (!warnings.empty()) meta["warnings"] = std::move(warnings);
+  writer.add_meta(kMetaKey, std::move(meta));
   bool stored = false;
   if (mode != CacheMode::kOff) {
     try {

@@ -33,6 +33,25 @@ double relative_l2_error(const LocalRadiance& a, const LocalRadiance& reference)
   return std::sqrt(num / den);
 }
 
+double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference) {
+  check_same_shape(a, reference);
+  double diff = 0, ref = 0;
+  for (std::size_t i = 0; i < a.values.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      diff += std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]);
+      ref += std::abs(static_cast<double>(reference.values[i][c]));
+    }
+  if (ref == 0) return diff == 0 ? 0.0 : INFINITY;
+  return diff / ref;
+}
+
+std::size_t count_nonfinite(std::span<const Rgb> values) {
+  std::size_t n = 0;
+  for (const Rgb& v : values)
+    n += !(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]));
+  return n;
+}
+
 double max_relative_error(const LocalRadiance& a, const LocalRadiance& reference) {
   check_same_shape(a, reference);
   double peak = 0;

@@ -46,7 +46,7 @@ Hash128 scene_input_hash(const SceneDesc& desc) {
   h.add_array(std::span<const char>(scene_text.data(), scene_text.size()));
   for (const auto& part : desc.parts) {
     if (part.mesh.starts_with("procedural:")) continue;
-    const auto bytes = read_bytes(resolve_mesh(part.mesh));
+    const auto bytes = read_bytes(resolve_mesh(part.mesh, desc.file));
     h.add(part.mesh).add_array(std::span<const char>(bytes));
   }
   return h.digest();

@@ -10,6 +10,10 @@
 
 namespace prt {
 
+/// Checks that every part's btf names a BTF material or an existing file (relative to the scene
+/// file's folder), without generating or reading any; throws an InputError naming the scene file.
+void check_scene_btf_names(const SceneDesc& desc);
+
 /// generate_btf_cached(part.btf, params with light_side = desc.local_grid) per distinct part
 /// material, in part order. `cache_hits` (optional) counts the materials from the cache.
 std::vector<std::shared_ptr<const Btf>> scene_part_btfs(const SceneDesc& desc, BtfParams params,

@@ -57,8 +57,19 @@ struct EvaluationOptions {
   std::uint64_t seed = 1;  ///< of the Frobenius estimate
 };
 
+/// Float rounding allowed on top of a declared bound: a float sum of k positive terms is within
+/// k * 2^-24 relative, and rows of the scenes here have at most a few hundred terms.
+inline constexpr double kFloatRoundingTolerance = 1e-5;
+
+/// Throws a NumericalError when `approx` (the backend's relight, in the pixel basis) has a
+/// non-finite value or differs from `exact` by more than the backend's declared bound (plus
+/// kFloatRoundingTolerance) in its declared norm: a report must not print such a number.
+void check_within_declared_bound(const CompressedTransfer& ct, const LocalRadiance& approx,
+                                 const LocalRadiance& exact, const std::string& light);
+
 /// Evaluate `ct` on `lights` (error per light vs the exact product with `exact`), timing the
-/// first light's relight `repeats` times. `context` may be null (no OpenCL).
+/// first light's relight `repeats` times. Throws check_within_declared_bound()'s NumericalError.
+/// `context` may be null (no OpenCL).
 BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferMatrix& exact,
                                    const std::vector<EvaluationLight>& lights, ClContext* context,
                                    const EvaluationOptions& options = {});

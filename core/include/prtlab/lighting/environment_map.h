@@ -13,8 +13,8 @@
 #include <filesystem>
 #include <vector>
 
-#include "prtlab/sphere/cubemap.h"
 #include "prtlab/base/types.h"
+#include "prtlab/sphere/cubemap.h"
 
 namespace prt {
 
@@ -40,12 +40,22 @@ Vec2d direction_to_latlong(const Vec3d& d);
 
 struct EnvLoadReport {
   std::size_t invalid_texels = 0;  ///< texels with a NaN, Inf or negative channel, set to 0
+  float max_radiance = 0;          ///< the largest channel value kept
+  bool aspect_2_to_1 = true;       ///< width == 2 x height, as a lat-long map is
 };
+
+/// Radiance above this warns ("radiance-range"): a float relight sums up to 6 R^2 products and
+/// error norms square them, which leaves float's range near 1e19.
+inline constexpr float kRadianceWarnLimit = 1e15f;
+/// Radiance above this is refused: a relight over a 64 x 64 cubemap (24,576 pixels) of such
+/// values overflows float to +Inf.
+inline constexpr float kRadianceLimit = 1e30f;
 
 /// Load a lat-long EXR (RGB or RGBA, or luminance-only Y; half or float; scanline or tiled;
 /// alpha ignored). NaN, Inf and negative channel values are replaced by 0 with one warning
-/// giving the number of texels affected. Errors (missing file, not an EXR, truncated, no
-/// colour channels) are InputErrors naming the file.
+/// giving the number of texels affected. A map that is not 2:1 warns ("latlong-aspect"): it is
+/// stretched onto the sphere. Errors (missing file, not an EXR, truncated, no colour channels,
+/// radiance above kRadianceLimit) are InputErrors naming the file.
 LatLongImage load_latlong_exr(const std::filesystem::path& file, EnvLoadReport* report = nullptr);
 
 /// Area-correct resampling: each cubemap pixel receives the radiance of the lat-long texels

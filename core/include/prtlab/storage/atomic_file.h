@@ -1,6 +1,9 @@
 #pragma once
 // Nothing prtlab writes is ever half-written: output goes to "<path>.tmp.<pid>.<n>" and is renamed
-// over the destination only after a successful close.
+// over the destination only after a successful close. A process stopped while writing leaves its
+// temporary behind; SIGINT and SIGTERM remove it (remove_temporaries_on_signal), and for what
+// nothing can catch (SIGKILL, a crash, a power cut) the next write of that destination, and the
+// stage cache's first use of a stage folder, remove temporaries whose process is gone.
 #include <filesystem>
 #include <functional>
 #include <ostream>
@@ -12,8 +15,28 @@ namespace prt {
 /// Calls write(tmp_path) and renames tmp_path to path on success; removes it on failure.
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(const std::filesystem::path& tmp)>& write);
+/// A file of a set written all or nothing: write(tmp) fills the temporary.
+struct PendingFile {
+  std::filesystem::path path;
+  std::function<void(const std::filesystem::path& tmp)> write;
+};
+/// Writes every file to its temporary and renames them into place only after all succeeded:
+/// a command writing an image and its preview leaves neither when one of them fails.
+void write_files_atomically(std::span<const PendingFile> files);
 /// Convenience: write bytes / text atomically (creates parent directories).
 void write_bytes_atomically(const std::filesystem::path& path, std::span<const std::byte> bytes);
 void write_text_atomically(const std::filesystem::path& path, std::string_view text);
+
+/// True for a name "<anything>.tmp.<pid>.<n>" as write_file_atomically makes; sets *pid.
+bool is_atomic_temporary_name(const std::string& filename, long* pid = nullptr);
+/// Removes the temporaries in `dir` (not recursive) left by processes that no longer run on this
+/// machine; only those of destination `only_for` when it is non-empty. Returns how many it removed.
+/// The cache is assumed local: a process of the same pid on another host sharing the folder
+/// would look alive or dead by this host's process table.
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
+                                     const std::string& only_for = {});
+/// Installs SIGINT and SIGTERM handlers that unlink this process's temporaries in flight and
+/// then die of the signal as before. Idempotent; the CLI calls it first thing.
+void remove_temporaries_on_signal();
 
 }  // namespace prt

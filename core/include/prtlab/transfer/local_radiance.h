@@ -40,6 +40,10 @@ struct LocalRadiance {
 /// Relative L2 error ||a - b|| / ||b|| over all values and channels (b is the reference).
 /// Throws when the shapes differ.
 double relative_l2_error(const LocalRadiance& a, const LocalRadiance& reference);
+/// Relative L1 error sum |a - b| / sum |b| over all values and channels.
+double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference);
+/// Values with a NaN or infinite channel: a relight that overflowed float, or bad input.
+std::size_t count_nonfinite(std::span<const Rgb> values);
 /// Largest |a - b| over values and channels, divided by the largest |b| (max-norm error).
 double max_relative_error(const LocalRadiance& a, const LocalRadiance& reference);
 
