@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -255,6 +256,11 @@ long dead_pid() {
   return static_cast<long>(child);
 }
 
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 void touch(const fs::path& p) {
   fs::create_directories(p.parent_path());
   std::ofstream(p) << "half an archive";
@@ -313,19 +319,21 @@ TEST(AtomicFile, TemporaryNamesAreRecognisedExactly) {
     EXPECT_FALSE(is_atomic_temporary_name(name)) << name;
 }
 
-TEST(AtomicFile, AWriteRemovesTheStaleTemporariesOfItsDestination) {
+TEST(AtomicFile, AProcesssFirstWriteIntoAFolderRemovesItsStaleTemporaries) {
   const fs::path dir = fs::temp_directory_path() / fmt::format("prtlab_atomic_{}", ::getpid());
   fs::remove_all(dir);
   const long gone = dead_pid();
   const fs::path mine = dir / fmt::format("out.json.tmp.{}.7", gone);
   const fs::path others = dir / fmt::format("other.json.tmp.{}.7", gone);
+  const fs::path live = dir / fmt::format("live.json.tmp.{}.7", static_cast<long>(::getppid()));
   touch(mine);
   touch(others);
+  touch(live);
   write_text_atomically(dir / "out.json", "{}");
   EXPECT_FALSE(fs::exists(mine));
-  EXPECT_TRUE(fs::exists(others)) << "only the destination's own temporaries are swept on write";
-  EXPECT_EQ(remove_stale_temporaries(dir), 1u);
   EXPECT_FALSE(fs::exists(others));
+  EXPECT_TRUE(fs::exists(live)) << "a running process's temporary was removed";
+  EXPECT_EQ(slurp(dir / "out.json"), "{}");
   fs::remove_all(dir);
 }
 

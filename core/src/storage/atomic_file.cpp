@@ -9,6 +9,8 @@
 #include <charconv>
 #include <cstring>
 #include <fstream>
+#include <mutex>
+#include <set>
 #include <vector>
 
 #include "prtlab/base/error.h"
@@ -78,8 +80,7 @@ bool is_atomic_temporary_name(const std::string& filename, long* pid) {
   return true;
 }
 
-std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
-                                     const std::string& only_for) {
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
   std::size_t removed = 0;
   std::error_code ec;
@@ -87,7 +88,6 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
     const std::string name = it->path().filename().string();
     long pid = 0;
     if (!is_atomic_temporary_name(name, &pid)) continue;
-    if (!only_for.empty() && name.rfind(only_for + ".tmp.", 0) != 0) continue;
     if (!process_is_gone(pid)) continue;
     std::error_code rm;
     if (fs::remove(it->path(), rm)) {
@@ -96,6 +96,17 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
     }
   }
   return removed;
+}
+
+void remove_stale_temporaries_once(const std::filesystem::path& dir) {
+  static std::mutex mutex;
+  static std::set<std::string> swept;
+  {
+    const std::lock_guard guard(mutex);
+    if (!swept.insert(dir.lexically_normal().string()).second) return;
+  }
+  if (const std::size_t n = remove_stale_temporaries(dir))
+    log_info("removed {} unfinished file(s) of stopped processes in {}", n, dir.string());
 }
 
 void remove_temporaries_on_signal() {
@@ -133,8 +144,8 @@ void write_files_atomically(std::span<const PendingFile> files) {
         fs::create_directories(f.path.parent_path(), ec);
         if (ec) throw InputError(f.path, fmt::format("cannot create directory: {}", ec.message()));
       }
-      remove_stale_temporaries(f.path.has_parent_path() ? f.path.parent_path() : fs::path("."),
-                               f.path.filename().string());
+      remove_stale_temporaries_once(f.path.has_parent_path() ? f.path.parent_path()
+                                                             : fs::path("."));
       fs::path tmp = f.path;
       tmp += fmt::format(".tmp.{}.{}", ::getpid(), counter.fetch_add(1));
       tmps.push_back(tmp);

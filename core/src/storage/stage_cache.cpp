@@ -3,7 +3,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <string>
 
 #include "prtlab/base/error.h"
@@ -47,20 +46,6 @@ std::shared_ptr<std::mutex> entry_lock(const std::filesystem::path& file) {
   return lock;
 }
 
-// Each stage folder is swept once per process for temporaries of killed processes: a sweep per
-// fetch would list the folder on every cache hit.
-void sweep_stage_folder_once(const std::filesystem::path& dir) {
-  static std::mutex mutex;
-  static std::set<std::string> swept;
-  {
-    const std::lock_guard guard(mutex);
-    if (!swept.insert(dir.string()).second) return;
-  }
-  if (const std::size_t n = remove_stale_temporaries(dir))
-    log_info("stage cache: removed {} unfinished file(s) of stopped processes in {}", n,
-             dir.string());
-}
-
 }  // namespace
 
 StageCache::StageCache() : StageCache(cache_dir()) {}
@@ -83,7 +68,8 @@ StageCache::Stats StageCache::stats() const {
 void StageCache::fetch(std::string_view stage, const Hash128& key, const Compute& compute,
                        const Consume& consume, CacheMode mode) {
   const std::filesystem::path file = path_for(stage, key);
-  if (mode != CacheMode::kOff) sweep_stage_folder_once(file.parent_path());
+  // Also on hits: a process that only reads still clears what a killed writer left.
+  if (mode != CacheMode::kOff) remove_stale_temporaries_once(file.parent_path());
   const std::shared_ptr<std::mutex> lock = entry_lock(file);
   const std::lock_guard guard(*lock);
   if (mode == CacheMode::kUse && contains(stage, key)) {

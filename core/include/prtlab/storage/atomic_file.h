@@ -30,11 +30,13 @@ void write_text_atomically(const std::filesystem::path& path, std::string_view t
 /// True for a name "<anything>.tmp.<pid>.<n>" as write_file_atomically makes; sets *pid.
 bool is_atomic_temporary_name(const std::string& filename, long* pid = nullptr);
 /// Removes the temporaries in `dir` (not recursive) left by processes that no longer run on this
-/// machine; only those of destination `only_for` when it is non-empty. Returns how many it removed.
-/// The cache is assumed local: a process of the same pid on another host sharing the folder
-/// would look alive or dead by this host's process table.
-std::size_t remove_stale_temporaries(const std::filesystem::path& dir,
-                                     const std::string& only_for = {});
+/// machine. Returns how many it removed. The folder is assumed local: a process of the same pid
+/// on another host sharing it would look alive or dead by this host's process table.
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir);
+/// remove_stale_temporaries(dir) the first time this process asks for `dir`, nothing after: a
+/// folder of thousands of cache entries is listed once, not on every write. Writes and the stage
+/// cache call it.
+void remove_stale_temporaries_once(const std::filesystem::path& dir);
 /// Installs SIGINT and SIGTERM handlers that unlink this process's temporaries in flight and
 /// then die of the signal as before. Idempotent; the CLI calls it first thing.
 void remove_temporaries_on_signal();
