@@ -174,7 +174,7 @@ void run_compress(const CompressCli& o) {
   // Validate the backend and parameters before any expensive stage.
   const auto& entry = CompressorRegistry::instance().get(o.backend);
   (void)ParamSet(o.backend, entry.params, params);
-  const auto device_options = ParamSet::parse_assignments(o.device_params);
+  const auto device_options = ParamSet::parse_assignments(o.device_params, "--device-param");
   (void)CompressorRegistry::instance().device_options(o.backend, device_options);
 
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));

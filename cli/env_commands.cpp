@@ -194,6 +194,13 @@ void run_fit_srbf(const FitSrbfOptions& o) {
   const std::filesystem::path file = resolve_envmap(o.input);
   const LatLongImage image = load_latlong_exr(file);
   const Cubemap light = resample_to_cubemap(image, o.resolution);
+  // A map without energy (all black, or every texel invalid and zeroed) has no relative error
+  // to fit: refused, naming the map, instead of a "perfect" 0 / 0.
+  double energy = 0;
+  for (const Rgb& v : light.radiance) energy += static_cast<double>(v.x) + v.y + v.z;
+  if (!(energy > 0))
+    throw InputError(file, "the map has no energy (every texel is zero or invalid): there is "
+                           "nothing to fit, and a relative error against it is undefined");
   ScatteredFitOptions so;
   so.count = o.count;
   so.rounds = o.rounds;

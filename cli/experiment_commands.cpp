@@ -99,6 +99,7 @@ struct RunCli {
   bool plot = true;
   bool json = false;
   std::vector<std::string> scenes;
+  std::size_t max_points = experiments::kDefaultMaxPoints;
 };
 
 std::vector<std::string> registered_backends() {
@@ -121,6 +122,7 @@ experiments::RunSummary run_one(const std::filesystem::path& file, const std::st
   ro.recompute = o.recompute;
   ro.device = device;
   ro.scenes = o.scenes;
+  ro.max_points = o.max_points;
   ro.show_progress_bars = !g.quiet;
   ro.command_line = command_line_from_provenance();
   if (!g.quiet)
@@ -128,6 +130,16 @@ experiments::RunSummary run_one(const std::filesystem::path& file, const std::st
   auto summary = experiments::run_experiment(spec, ro);
   experiments::write_experiment_report(summary.folder, o.plot, g.quiet);
   return summary;
+}
+
+// A run with failed points has not measured what its file asks for: the command fails with a
+// one-line summary (printed even with -q) after the result files are written.
+void check_run(const experiments::RunSummary& s) {
+  if (s.failed == 0) return;
+  throw Error(fmt::format("{}: {} point{} failed, {} measured{} (first: {}; every failure is in {})",
+                          s.folder.string(), s.failed, s.failed == 1 ? "" : "s", s.points,
+                          s.complete ? "" : "; not marked complete", s.first_failure,
+                          (s.folder / "README.md").string()));
 }
 
 void print_run(const experiments::RunSummary& s, bool json) {
@@ -191,10 +203,13 @@ void run_file(const RunCli& o) {
                   r.at("folder").get<std::string>().c_str());
     return;
   }
-  // Parse before opening a device: a typo in the file costs nothing.
-  (void)experiments::parse_experiment(file, variant, registered_backends());
+  // Parse and size before opening a device: a typo in the file costs nothing.
+  experiments::check_point_budget(experiments::parse_experiment(file, variant, registered_backends()),
+                                  o.max_points);
   auto ctx = open_device_from_options();
-  print_run(run_one(file, variant, o, ctx ? &*ctx : nullptr), o.json);
+  const auto summary = run_one(file, variant, o, ctx ? &*ctx : nullptr);
+  print_run(summary, o.json);
+  check_run(summary);
 }
 
 void run_all(const RunCli& o) {
@@ -277,7 +292,9 @@ void run_all(const RunCli& o) {
       if (!quiet)
         std::fprintf(stderr, "== experiment %s%s\n", file.stem().string().c_str(),
                      variant.empty() ? "" : (" (" + variant + ")").c_str());
-      print_run(run_one(file, variant, o, ctx ? &*ctx : nullptr), false);
+      const auto summary = run_one(file, variant, o, ctx ? &*ctx : nullptr);
+      print_run(summary, false);
+      check_run(summary);
     } catch (const Error& e) {
       std::fprintf(stderr, "prtlab: error: %s\n", e.what());
       failures.push_back(file.string());
@@ -352,6 +369,10 @@ void add_run_options(CLI::App* c, RunCli& o) {
   c->add_option("--scenes", o.scenes, "Replace the experiment's scenes (names or .toml paths)")
       ->delimiter(',');
   c->add_flag("!--no-plot", o.plot, "Do not run scripts/plot_experiment.py");
+  c->add_option("--max-points", o.max_points,
+                "Refuse a file that plans more points than this (a grid typo costs nothing)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 }  // namespace

@@ -159,10 +159,21 @@ fs::path result_folder(const ExperimentSpec& spec, const fs::path& out_root) {
 RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   ExperimentSpec spec = spec_in;
   if (!o.scenes.empty()) spec.scenes = o.scenes;
+  // The size of the run and every input the file names are checked before any folder or
+  // stage is touched.
+  check_point_budget(spec, o.max_points);
+  check_environments(spec);
   RunSummary summary;
   summary.folder = result_folder(spec, o.out_root);
   std::vector<std::string> previous_files;
   const fs::path& folder = summary.folder;
+  // Scenes resolve before the folder is looked at: a missing scene is the error to report,
+  // not "pass --force".
+  StageCache cache = o.cache_root ? StageCache(*o.cache_root) : StageCache();
+  std::vector<SceneVariant> variants;
+  for (const auto& s : spec.scenes)
+    for (auto& v : scene_variants(s, spec.scene_grid, cache.root() / "derived-scenes"))
+      variants.push_back(std::move(v));
   if (fs::exists(folder / ".complete")) {
     if (!o.force)
       throw ParameterError(fmt::format(
@@ -181,7 +192,6 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                         "a run of this experiment started here; without "
                         ".complete beside it, it did not finish\n");
 
-  StageCache cache = o.cache_root ? StageCache(*o.cache_root) : StageCache();
   const CacheMode mode = o.recompute ? CacheMode::kRefresh : CacheMode::kUse;
   BenchOptions bo{o.device, mode, o.show_progress_bars};
   const Provenance prov = collect_provenance(o.command_line, o.device);
@@ -190,14 +200,9 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   if (std::ifstream in("/proc/loadavg"); in) std::getline(in, load);
   const auto& registry = CompressorRegistry::instance();
 
-  std::vector<SceneVariant> variants;
-  for (const auto& s : spec.scenes)
-    for (auto& v : scene_variants(s, spec.scene_grid, cache.root() / "derived-scenes"))
-      variants.push_back(std::move(v));
-  std::size_t planned = 0;
-  for (std::size_t i = 0; i < variants.size(); ++i)
-    for (const auto& b : spec.backends)
-      planned += spec.kind == ExperimentKind::kSweep ? sweep_points(spec, b).size() : 1;
+  const RunPlan plan = plan_run(spec, variants);
+  const std::size_t planned = plan.points;
+  if (o.on_progress) o.on_progress(fmt::format("{}: {}", spec.name, plan.summary()));
 
   const std::string tag = spec.variant.empty() ? spec.name : spec.name + " " + spec.variant;
   std::size_t done = 0, computed = 0, hits = 0;
@@ -386,6 +391,21 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                    {"stage_hits", cache.stats().hits},
                    {"stage_misses", cache.stats().misses}}}};
   write_result_files(result, folder);
+  summary.points = points.size();
+  summary.failed = failures.size();
+  for (const auto& f : failures) {
+    if (!summary.first_failure.empty()) break;
+    summary.first_failure =
+        fmt::format("{} {}: {}", f["scene"].get<std::string>(),
+                    f["point"].get<std::string>().empty() ? "(scene)" : f["point"].get<std::string>(),
+                    f["error"].get<std::string>());
+  }
+  // A run that measured nothing is not complete: the folder keeps .started, and the next run
+  // retries every point instead of skipping a folder of failures.
+  if (points.empty() && !failures.empty()) {
+    summary.result = std::move(result);
+    return summary;
+  }
   const std::vector<std::string> files = written_files(result);
   for (const auto& f : previous_files)
     if (!std::binary_search(files.begin(), files.end(), f) && f.find("..") == std::string::npos)
@@ -397,6 +417,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                                                       .dump(2) +
                                                   "\n");
   fs::remove(folder / ".started");
+  summary.complete = true;
   summary.result = std::move(result);
   return summary;
 }

@@ -25,6 +25,7 @@
 #include <string>
 
 #include "experiment_spec.h"
+#include "run_plan.h"
 #include "prtlab/storage/stage_cache.h"
 
 namespace prt {
@@ -42,6 +43,8 @@ struct RunOptions {
   std::vector<std::string> scenes;                  ///< replace the spec's scenes when not empty
   bool show_progress_bars = true;                   ///< the stages' progress bars
   std::string command_line;                         ///< recorded in the provenance
+  /// A file planning more points than this is refused before anything runs (run_plan.h).
+  std::size_t max_points = kDefaultMaxPoints;
   /// A line per point and stage, with an ETA ("[fig6 3/7, ETA 1m40s] bunny csr_zstd: ...").
   std::function<void(const std::string&)> on_progress;
   /// For tests: stop (throw RunInterrupted) after measuring this many points, as a killed run
@@ -58,6 +61,10 @@ struct RunSummary {
   std::filesystem::path folder;
   nlohmann::json result;  ///< what result.json holds
   bool resumed = false;   ///< the folder held an interrupted run
+  std::size_t points = 0;  ///< points measured
+  std::size_t failed = 0;  ///< points (or scenes) that failed, each in result.json "failures"
+  std::string first_failure;  ///< "scene point: error" of the first failure, for one-line summaries
+  bool complete = false;  ///< .complete written: false when every point failed
 };
 
 /// The result folder `spec` writes under `out_root`.
@@ -65,7 +72,10 @@ std::filesystem::path result_folder(const ExperimentSpec& spec,
                                     const std::filesystem::path& out_root);
 
 /// Run the experiment and write its result files (not the report). Throws ParameterError when
-/// the folder holds a complete run and !force (before any stage runs).
+/// the folder holds a complete run and !force, and InputError when an environment map it names
+/// cannot be read (both before any stage runs). A point that fails is recorded (failures in
+/// result.json and the README) and the run goes on; a run where every point failed writes its
+/// files but not .complete. Callers report `failed` (the CLI exits non-zero).
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options);
 
 }  // namespace prt::experiments

@@ -36,8 +36,11 @@ std::string join(const auto& items) {
   return out;
 }
 
+// "line N: " for a node parsed from the file; nodes keep their source only when moved, never
+// when copied (toml++), so parse_experiment moves the variant's keys into place.
 std::string line_of(const toml::node& n) {
-  return fmt::format("line {}: ", n.source().begin.line);
+  const auto line = n.source().begin.line;
+  return line > 0 ? fmt::format("line {}: ", line) : std::string();
 }
 
 // The value of a scalar node as a parameter string ("3", "0.05", "true", "lanes").
@@ -90,11 +93,10 @@ std::map<std::string, std::string> param_table(const fs::path& file, const toml:
   return out;
 }
 
-// `base` with the keys of `over` replacing its own (a variant replaces whole keys).
-toml::table apply_variant(const toml::table& base, const toml::table& over) {
-  toml::table out = base;
-  for (const auto& [k, v] : over) out.insert_or_assign(k, v);
-  return out;
+// `base` with the keys of `over` replacing its own (a variant replaces whole keys). Both are
+// moved from, so every node keeps the line it was read from.
+void apply_variant(toml::table& base, toml::table&& over) {
+  for (auto&& [k, v] : over) base.insert_or_assign(k, std::move(v));
 }
 
 toml::table load_table(const fs::path& file) {
@@ -160,6 +162,12 @@ EnvironmentSpec parse_environment(const fs::path& file, const std::string& name)
   }
   e.name = fs::path(name).stem().string();
   return e;
+}
+
+const std::vector<std::string>& experiment_kinds() {
+  static const std::vector<std::string> kinds = {"equal_storage", "sweep", "material_table",
+                                                 "stability"};
+  return kinds;
 }
 
 std::string_view to_string(ExperimentKind k) {
@@ -254,22 +262,23 @@ std::vector<std::string> experiment_variants(const fs::path& file) {
 
 ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant,
                                 const std::vector<std::string>& registered) {
-  const toml::table root = load_table(file);
-  check_keys(file, root, kTopKeys, "the experiment");
-  toml::table t = root;
+  toml::table t = load_table(file);
+  check_keys(file, t, kTopKeys, "the experiment");
   if (!variant.empty() &&
       variant.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_") != std::string::npos)
     throw InputError(file, fmt::format("variant '{}': use lower-case letters, digits, '-' and "
                                        "'_' (it names the result folder)",
                                        variant));
   if (!variant.empty()) {
-    const auto* variants = root["variant"].as_table();
-    const auto* chosen = variants ? (*variants)[variant].as_table() : nullptr;
+    auto* variants = t["variant"].as_table();
+    auto* chosen = variants ? (*variants)[variant].as_table() : nullptr;
     if (!chosen)
       throw InputError(file, fmt::format("no variant '{}' (declared: {})", variant,
                                          variants ? join(experiment_variants(file)) : "none"));
     check_keys(file, *chosen, kTopKeys, fmt::format("[variant.{}]", variant));
-    t = apply_variant(root, *chosen);
+    toml::table over = std::move(*chosen);
+    t.erase("variant");
+    apply_variant(t, std::move(over));
   }
   t.erase("variant");
 
@@ -292,8 +301,8 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
     else if (kind == "sweep")
       s.kind = ExperimentKind::kSweep;
     else
-      throw InputError(file,
-                       line_of(*k) + fmt::format("kind '{}': use equal_storage or sweep", kind));
+      throw InputError(file, line_of(*k) + fmt::format("unknown kind '{}' (kinds: {})", kind,
+                                                       join(experiment_kinds())));
   }
   const auto* scenes = t["scenes"].node();
   if (!scenes) throw InputError(file, "missing required key 'scenes'");
@@ -324,6 +333,18 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   if (const auto* e = t["exclude"].node()) s.exclude = string_list(file, *e, "exclude");
   const auto& registry = CompressorRegistry::instance();
   // Excluding a backend that is not registered is harmless (a plugin not loaded this time).
+  // A name listed twice (or beside "*", which lists every backend) would measure the same
+  // points twice or silently merge two parameter sets: refused.
+  const std::string where = t["backends"] ? line_of(*t["backends"].node()) : std::string();
+  for (std::size_t i = 0; i < listed.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (listed[i] == listed[j])
+        throw InputError(file, where + fmt::format("backend '{}' is listed twice in 'backends' "
+                                                   "(each backend runs once; give one entry)",
+                                                   listed[i]));
+  if (listed.size() > 1 && std::ranges::count(listed, "*") > 0)
+    throw InputError(file, where + "'*' already lists every registered backend: give '*' alone, "
+                                   "or name the backends (use 'exclude' to leave some out)");
   for (const auto& b : listed) {
     if (b == "*") {
       for (const auto& r : registered)

@@ -21,6 +21,9 @@ enum class ExperimentKind {
   kSweep,         ///< every point of every backend's grid (run time and storage against error)
 };
 
+/// Every `kind` an experiment file may declare: the two parse_experiment() reads and the two
+/// that run their own way (material_table.h, stability_suite.h).
+const std::vector<std::string>& experiment_kinds();
 std::string_view to_string(ExperimentKind k);
 
 /// One environment of the evaluation: a lat-long EXR by name or path, or a procedural sun and

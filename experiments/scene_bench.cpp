@@ -56,6 +56,18 @@ Cubemap environment_cubemap(const EnvironmentSpec& e, int resolution, double rot
   return resample_to_cubemap(rotate_deg == 0 ? img : rotate_latlong_y(img, rotate_deg), resolution);
 }
 
+void check_environments(const ExperimentSpec& spec) {
+  for (const auto& e : spec.environments) {
+    if (e.sun_ratio) continue;
+    try {
+      (void)load_latlong_exr(e.file);
+    } catch (const Error& err) {
+      throw InputError(spec.file, fmt::format("environment '{}' ({}) is not a readable map: {}",
+                                              e.name, e.file, err.what()));
+    }
+  }
+}
+
 SceneBench prepare_bench(const SceneVariant& variant, const ExperimentSpec& spec, StageCache& cache,
                          const BenchOptions& o) {
   SceneBench b;

@@ -60,4 +60,9 @@ double exposure_of(const RgbImage& img, std::span<const std::uint8_t> mask);
 /// `rotate_deg` (a procedural sun turns its direction; an EXR turns its columns).
 Cubemap environment_cubemap(const EnvironmentSpec& e, int resolution, double rotate_deg = 0);
 
+/// Reads every environment map `spec` names (the sun environments need no file) so that a file
+/// that exists but is not a readable map fails before any stage runs: an InputError naming the
+/// experiment file, the environment and the map's problem.
+void check_environments(const ExperimentSpec& spec);
+
 }  // namespace prt::experiments

@@ -115,7 +115,7 @@ def find_problems(results: Path, repo: Path, use_git: bool) -> list[Problem]:
             continue
         if not prov.get("git"):
             problems.append(Problem(rel(js), ": its provenance names no git hash"))
-        if prov.get("git_dirty") is True:
+        if prov.get("git_dirty") is True or str(prov.get("git", "")).endswith("-dirty"):
             problems.append(Problem(rel(js), f": its provenance says the tree was dirty (git {prov.get('git')})"))
     return problems
 

@@ -4,6 +4,9 @@
 #include "prtlab/btf/measured_btf.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -329,6 +332,38 @@ TEST(UtiaBtf, BadDirectoriesNameTheFile) {
   expect_input_error([&] { read_utia_btf(d); }, d / "light1_view2.png", "does not match");
   expect_input_error([&] { read_utia_btf(d / "nope"); }, d / "nope", "not found");
   expect_input_error([&] { read_utia_btf(d / "notes.txt"); }, d / "notes.txt", "not a directory");
+}
+
+// A PNG whose header declares 100,000 x 100,000 pixels is named as too large (stb alone would
+// say "unknown image type": it refuses the size, then tries its other formats).
+TEST(UtiaBtf, APngDeclaringAnAbsurdSizeIsNamedAsTooLarge) {
+  TempDir dir("utia");
+  const fs::path d = dir / "btf";
+  fs::create_directories(d);
+  const fs::path png = d / "tl000_pl000_tv000_pv000.png";
+  write_png(constant_image(2, 1), png);
+  std::string bytes;
+  {
+    std::ifstream in(png, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(bytes.size(), 24u);
+  ASSERT_EQ(bytes.substr(12, 4), "IHDR");
+  for (const int at : {16, 20}) {  // width and height, big-endian
+    const std::uint32_t v = 100000;
+    for (int k = 0; k < 4; ++k) bytes[at + k] = static_cast<char>((v >> (24 - 8 * k)) & 0xff);
+  }
+  std::ofstream(png, std::ios::binary) << bytes;
+  try {
+    (void)read_utia_btf(d);
+    ADD_FAILURE() << "a 1e10-pixel PNG was read";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(png.filename().string()), std::string::npos) << what;
+    EXPECT_NE(what.find("100000 x 100000"), std::string::npos) << what;
+    EXPECT_NE(what.find("too large"), std::string::npos) << what;
+    EXPECT_EQ(what.find("unknown image type"), std::string::npos) << what;
+  }
 }
 
 TEST(UtiaBtf, NamesSharingNoAnglesNameTheMissingFileWithoutAnNSquaredTable) {
@@ -744,6 +779,47 @@ TEST(UboBtf, OversizedImportsAreInputErrorsBeforeAllocating) {
   EXPECT_GT(measured_import_bytes(256, wide), measured_import_byte_limit());
   const MeasuredBtf m = read_ubo_btf(file, zenith_only());
   EXPECT_EQ(m.btf.value(12345, 0, 0).g, 1.f);
+}
+
+// The peak memory of a child process that reads UBO headers declaring 65536 x 65536 and
+// 16384 x 16384 texels (at the import's default resolution and box-filtered to 1 texel): each is
+// refused with an InputError before anything per texel is allocated (a 4 KB file cannot hold
+// such a BTF; allocating first would take gigabytes).
+TEST(UboBtf, AHugeDeclaredTexelCountIsRefusedWithoutAllocatingIt) {
+  TempDir dir("ubo");
+  std::vector<fs::path> files;
+  for (const std::uint32_t side : {65536u, 16384u}) {
+    for (const char* signature : {"!FMF06FC", "!BDIF06R2!"}) {
+      Bytes b;
+      common_header(b, signature, {{0, 0}}, {{0, 0}}, side, side);
+      files.push_back(dir / ("x" + std::to_string(side) + "-" + std::to_string(files.size()) + ".btf"));
+      b.save(files.back());
+    }
+  }
+  const pid_t child = ::fork();
+  if (child == 0) {
+    int code = 0;
+    for (const auto& file : files)
+      for (const int resolution : {0, 1}) {
+        MeasuredImportOptions o;
+        o.resolution = resolution;
+        try {
+          (void)read_ubo_btf(file, o);
+          code = 2;  // read: not what a 4 KB file can hold
+        } catch (const InputError&) {
+        } catch (...) {
+          code = 3;
+        }
+      }
+    rusage usage{};
+    ::getrusage(RUSAGE_SELF, &usage);
+    if (code == 0 && usage.ru_maxrss > 256 * 1024) code = 4;  // ru_maxrss is in KB
+    ::_exit(code);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: read, 3: not an InputError, 4: peak RSS above 256 MB";
 }
 
 TEST(UboBtf, BdiTexelIndexIsBoundByTheFileSize) {

@@ -81,10 +81,12 @@ class ResultsProvenance(unittest.TestCase):
         self.write("results/x/README.md", self.good_report().replace(self.sha, self.sha + " (dirty)"))
         self.write("results/y/README.md", self.good_report())
         self.write("results/y/result.json", json.dumps({"provenance": {"git": self.sha, "git_dirty": True}}))
+        self.write("results/y/fit.json", json.dumps({"provenance": {"git": self.sha + "-dirty"}}))
         rc, out = self.check()
         self.assertEqual(rc, 1)
         self.assertIn("results/x/README.md:4: written from a dirty tree", out)
         self.assertIn("results/y/result.json: its provenance says the tree was dirty", out)
+        self.assertIn("results/y/fit.json: its provenance says the tree was dirty", out)
 
     def test_a_top_level_file_needs_a_report_of_its_stem(self):
         self.write("results/table9.csv", "a\n")

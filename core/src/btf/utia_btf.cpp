@@ -89,10 +89,28 @@ std::vector<unsigned char> read_file_bytes(const fs::path& file) {
 RgbImage read_png_linear(const fs::path& file) {
   const std::vector<unsigned char> bytes = read_file_bytes(file);
   const int len = static_cast<int>(bytes.size());
+  // The size a PNG declares is read from its IHDR before stb sees it: stb refuses a huge one
+  // but then tries its other formats and reports "unknown image type".
+  constexpr long long kMaxPixels = 1LL << 28;
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (bytes.size() >= 24 && std::equal(kSignature, kSignature + 8, bytes.begin()) &&
+      std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR")) {
+    const auto be32 = [&](std::size_t at) {
+      return static_cast<std::uint32_t>(bytes[at]) << 24 | static_cast<std::uint32_t>(bytes[at + 1]) << 16 |
+             static_cast<std::uint32_t>(bytes[at + 2]) << 8 | static_cast<std::uint32_t>(bytes[at + 3]);
+    };
+    const std::uint64_t dw = be32(16), dh = be32(20);
+    if (dw == 0 || dh == 0)
+      throw InputError(file, fmt::format("the PNG declares {} x {} pixels", dw, dh));
+    if (dw > (1u << 24) || dh > (1u << 24) || dw * dh > static_cast<std::uint64_t>(kMaxPixels))
+      throw InputError(file, fmt::format("the PNG declares {} x {} pixels: too large (at most {} "
+                                         "pixels, {} per side)",
+                                         dw, dh, kMaxPixels, 1u << 24));
+  }
   int w = 0, h = 0, n = 0;
   if (!stbi_info_from_memory(bytes.data(), len, &w, &h, &n))
     throw InputError(file, fmt::format("cannot read as PNG: {}", stbi_failure_reason()));
-  if (w <= 0 || h <= 0 || static_cast<long long>(w) * h > (1LL << 28))
+  if (w <= 0 || h <= 0 || static_cast<long long>(w) * h > kMaxPixels)
     throw InputError(file, fmt::format("unsupported PNG size {} x {}", w, h));
   RgbImage image(w, h);
   if (stbi_is_16_bit_from_memory(bytes.data(), len)) {

@@ -74,6 +74,18 @@ void check_within_declared_bound(const CompressedTransfer& ct, const LocalRadian
   const double bound = ct.declared_error_bound();
   const bool l1 = ct.declared_error_norm() == CompressedTransfer::ErrorNorm::kRelativeL1;
   const double measured = l1 ? relative_l1_error(approx, exact) : relative_l2_error(approx, exact);
+  if (std::isnan(measured)) {
+    // The exact product is zero (a black light, or a T that sees none of it): no relative
+    // error exists, and a lossless backend must relight to exact zeros.
+    const bool zero = std::all_of(approx.values.begin(), approx.values.end(),
+                                  [](const Rgb& v) { return v == Rgb(0.f); });
+    if (bound == 0 && !zero)
+      throw NumericalError(fmt::format(
+          "backend '{}': the exact relight with light '{}' is zero, but this lossless backend "
+          "relit it to non-zero values",
+          ct.backend(), light));
+    return;
+  }
   if (!std::isfinite(bound)) {
     // No bound to hold it to, but an approximation farther from T L than zero is a failed fit.
     if (measured > 1.0)

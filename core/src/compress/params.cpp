@@ -176,14 +176,15 @@ std::map<std::string, std::string> ParamSet::canonical() const {
   return out;
 }
 
-std::map<std::string, std::string> ParamSet::parse_assignments(std::span<const std::string> items) {
+std::map<std::string, std::string> ParamSet::parse_assignments(std::span<const std::string> items,
+                                                               std::string_view option) {
   std::map<std::string, std::string> out;
   for (const auto& item : items) {
     const auto eq = item.find('=');
     if (eq == std::string::npos || eq == 0)
-      throw ParameterError(fmt::format("--param '{}': expected key=value", item));
+      throw ParameterError(fmt::format("{} '{}': expected key=value", option, item));
     const std::string key = item.substr(0, eq);
-    if (out.contains(key)) throw ParameterError(fmt::format("--param: '{}' given twice", key));
+    if (out.contains(key)) throw ParameterError(fmt::format("{}: '{}' given twice", option, key));
     out[key] = item.substr(eq + 1);
   }
   return out;

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/relative_error.h"
 #include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/radiance_to_bins.h"
 
@@ -95,8 +96,8 @@ FrobeniusError frobenius_error(const CompressedTransfer& ct, const TransferMatri
     out.standard_error =
         norm_sq > 0 && mean > 0 ? se_mean / (2.0 * std::sqrt(mean * norm_sq)) : 0.0;
   }
-  out.relative =
-      norm_sq > 0 ? std::sqrt(std::max(sum, 0.0) / norm_sq) : std::sqrt(std::max(sum, 0.0));
+  out.relative = relative_to(std::sqrt(std::max(sum, 0.0)), std::sqrt(norm_sq),
+                             "relative Frobenius error of a compressed transfer");
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/relative_error.h"
 #include "prtlab/sphere/icosphere.h"
 
 namespace prt {
@@ -330,7 +331,7 @@ double srbf_relative_error(const SrbfLight& fit, const Cubemap& light) {
   std::vector<double> phi;
   std::vector<Vec3d> r;
   const double e = residuals(fit, s, phi, r);
-  return s.norm2 > 0 ? std::sqrt(e / s.norm2) : std::sqrt(e);
+  return relative_to(std::sqrt(e), std::sqrt(s.norm2), "relative error of an SRBF light fit");
 }
 
 double fit_srbf_coefficients(SrbfLight& fit, const Cubemap& light, double ridge) {
@@ -389,12 +390,12 @@ SrbfLight fit_scattered_srbf(const Cubemap& light, const ScatteredFitOptions& o,
   fit_srbf_coefficients(fit, light, o.ridge);
   const Samples s(light);
   ScatteredFitReport rep;
-  if (!(s.norm2 > 0)) {
-    // A black light: the zero coefficients are exact, and the optimiser's scaled objective
-    // would divide by zero.
-    if (report) *report = rep;
-    return fit;
-  }
+  if (!(s.norm2 > 0))
+    // A black light has nothing to fit: the zero coefficients reproduce it, but its relative
+    // error is 0 / 0, not a perfect score, and the optimiser's scaled objective divides by it.
+    throw ParameterError(
+        "the light has no energy (every texel is zero or invalid): there is nothing to fit, "
+        "and a relative error against it is undefined");
   double error = srbf_relative_error(fit, light);
   rep.initial_error = error;
   for (int round = 1; round <= o.rounds; ++round) {

@@ -1,10 +1,12 @@
 #include "prtlab/render/image_error.h"
 
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/relative_error.h"
 
 namespace prt {
 namespace {
@@ -73,15 +75,13 @@ ImageError image_error(const RgbImage& image, const RgbImage& reference,
   }
   const double inf = std::numeric_limits<double>::infinity();
   e.rmse = std::sqrt(sum_sq_diff / (3.0 * static_cast<double>(e.pixels)));
-  if (sum_sq_ref > 0) {
-    e.relative_l2 = std::sqrt(sum_sq_diff / sum_sq_ref);
-  } else {
-    e.relative_l2 = sum_sq_diff > 0 ? inf : 0.0;
-  }
-  if (e.rmse == 0) {
+  e.relative_l2 = relative_to(std::sqrt(sum_sq_diff), std::sqrt(sum_sq_ref),
+                              "relative L2 error of an image");
+  if (e.peak <= 0) {
+    // A black reference has no peak: the PSNR is as undefined as the relative error.
+    e.psnr_db = std::numeric_limits<double>::quiet_NaN();
+  } else if (e.rmse == 0) {
     e.psnr_db = inf;
-  } else if (e.peak <= 0) {
-    e.psnr_db = -inf;
   } else {
     e.psnr_db = 20.0 * std::log10(e.peak / e.rmse);
   }

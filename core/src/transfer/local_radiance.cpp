@@ -1,9 +1,11 @@
 #include "prtlab/transfer/local_radiance.h"
 
+
 #include <algorithm>
 #include <cmath>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/relative_error.h"
 
 namespace prt {
 
@@ -29,8 +31,7 @@ double relative_l2_error(const LocalRadiance& a, const LocalRadiance& reference)
       num += d * d;
       den += static_cast<double>(reference.values[i][c]) * reference.values[i][c];
     }
-  if (den == 0) return num == 0 ? 0.0 : INFINITY;
-  return std::sqrt(num / den);
+  return relative_to(std::sqrt(num), std::sqrt(den), "relative L2 error of a relight");
 }
 
 double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference) {
@@ -41,8 +42,7 @@ double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference)
       diff += std::abs(static_cast<double>(a.values[i][c]) - reference.values[i][c]);
       ref += std::abs(static_cast<double>(reference.values[i][c]));
     }
-  if (ref == 0) return diff == 0 ? 0.0 : INFINITY;
-  return diff / ref;
+  return relative_to(diff, ref, "relative L1 error of a relight");
 }
 
 std::size_t count_nonfinite(std::span<const Rgb> values) {

@@ -57,6 +57,11 @@ struct CompressorEntry {
   /// The parameter that trades storage against error; none for a fixed-size backend. The
   /// registry validates it against `params` and fills in its range (resolve_size_knob()).
   std::optional<SizeKnob> size_knob;
+  /// Rough seconds one compression at default parameters takes on the 3,286-vertex bunny on
+  /// one 2-core machine (the backend's README says where it was measured); the harness scales
+  /// it by a scene's vertex count to estimate how long an experiment file will take before it
+  /// runs. 0: the backend declares none (the estimate says so).
+  double cost_hint_seconds = 0;
   bool lossless =
       false;  ///< at default parameters, relight equals the exact product up to float rounding
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;

@@ -69,8 +69,10 @@ class ParamSet {
   /// Every value (given or default) as "key=value" strings, sorted: used in cache keys and reports.
   std::map<std::string, std::string> canonical() const;
 
-  /// Parse "k=v" strings (from --param) into a map; malformed entries are a ParameterError.
-  static std::map<std::string, std::string> parse_assignments(std::span<const std::string> items);
+  /// Parse "k=v" strings (from --param, or the option named `option`) into a map; malformed
+  /// entries are a ParameterError naming the option and the entry.
+  static std::map<std::string, std::string> parse_assignments(std::span<const std::string> items,
+                                                              std::string_view option = "--param");
 
  private:
   const Value& get(const std::string& key, ParamType type) const;

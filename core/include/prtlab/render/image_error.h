@@ -13,8 +13,9 @@
 // HDR images have no fixed peak (1.0 or 255), so PSNR uses the reference's own largest value:
 // it says how far the error sits below the brightest thing in the reference, and it changes
 // when the reference is rescaled only through that value, never through the error. Edge cases:
-// rmse = 0 gives psnr_db = +inf; a reference that is zero everywhere gives relative_l2 = 0 when
-// the image is too and +inf otherwise (and psnr_db = -inf). A non-finite value in either image
+// rmse = 0 gives psnr_db = +inf; a reference that is zero everywhere makes relative_l2 and
+// psnr_db undefined (NaN, JSON null, with the "zero-reference" warning; rmse and max_abs still
+// give the error). A non-finite value in either image
 // makes the metrics NaN (it is never skipped) and is counted in non_finite.
 #include <cstddef>
 #include <cstdint>

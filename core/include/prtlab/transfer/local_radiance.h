@@ -37,10 +37,11 @@ struct LocalRadiance {
   }
 };
 
-/// Relative L2 error ||a - b|| / ||b|| over all values and channels (b is the reference).
-/// Throws when the shapes differ.
+/// Relative L2 error ||a - b|| / ||b|| over all values and channels (b is the reference);
+/// NaN with the "zero-reference" warning when b is zero (base/relative_error.h). Throws when
+/// the shapes differ.
 double relative_l2_error(const LocalRadiance& a, const LocalRadiance& reference);
-/// Relative L1 error sum |a - b| / sum |b| over all values and channels.
+/// Relative L1 error sum |a - b| / sum |b| over all values and channels (NaN for b = 0).
 double relative_l1_error(const LocalRadiance& a, const LocalRadiance& reference);
 /// Values with a NaN or infinite channel: a relight that overflowed float, or bad input.
 std::size_t count_nonfinite(std::span<const Rgb> values);
