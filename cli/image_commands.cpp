@@ -109,7 +109,9 @@ void run_diff(const DiffOptions& o) {
   std::printf("reference      %s\n", o.reference.c_str());
   std::printf("pixels         %zu%s\n", e.pixels,
               o.mask.empty() ? "" : fmt::format(" (mask {})", o.mask).c_str());
-  std::printf("relative L2    %s\n", format_metric(e.relative_l2, "{:.6g}").c_str());
+  std::printf("relative L2    %s\n", e.non_finite == 0 && e.peak <= 0 && std::isnan(e.relative_l2)
+                                          ? "undefined (the reference is zero)"
+                                          : format_metric(e.relative_l2, "{:.6g}").c_str());
   std::printf("RMSE           %s\n", format_metric(e.rmse, "{:.6g}").c_str());
   std::printf("PSNR           %s dB (peak %s, the reference's largest value)\n",
               format_metric(e.psnr_db, "{:.2f}").c_str(), format_metric(e.peak, "{:.6g}").c_str());

@@ -1,6 +1,7 @@
 // prtlab precompute / prtlab relight: the exact transfer stage and the exact relight.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <vector>
@@ -112,7 +113,10 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
               ev.ms_project, o.repeat);
   if (ev.ms_opencl)
     std::printf("relight OpenCL %.3f ms kernel on %s\n", *ev.ms_opencl, ev.device.c_str());
-  std::printf("error          %.3e relative L2 vs the exact product\n", ev.errors.front().rel_l2);
+  if (std::isnan(ev.errors.front().rel_l2))
+    std::printf("error          undefined (the exact product is zero)\n");
+  else
+    std::printf("error          %.3e relative L2 vs the exact product\n", ev.errors.front().rel_l2);
   if (!o.out.empty()) std::printf("wrote          %s\n", o.out.c_str());
 }
 

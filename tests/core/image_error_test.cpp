@@ -1,4 +1,6 @@
 // Image error metrics (image_error.h) against hand-computed values, and the false-colour map.
+#include "prtlab/base/named_warning.h"
+#include "prtlab/base/relative_error.h"
 #include "prtlab/render/image_error.h"
 
 #include <gtest/gtest.h>
@@ -105,14 +107,23 @@ TEST(ImageError, NonFiniteValuesAreReportedNotSkipped) {
   EXPECT_TRUE(to_json(e)["relative_l2"].is_null());
 }
 
-TEST(ImageError, ZeroReference) {
+// Against a black reference the relative error and the PSNR are undefined, whether the image is
+// black too (0 / 0 is no perfect score) or not; the absolute metrics still say how far off it is.
+TEST(ImageError, ZeroReferenceIsUndefinedNotPerfect) {
   const RgbImage zero(2, 2);
   RgbImage img(2, 2);
-  EXPECT_EQ(image_error(img, zero).relative_l2, 0.0);
+  const int warned = warning_count(kZeroReferenceWarning);
+  const ImageError same = image_error(img, zero);
+  EXPECT_TRUE(std::isnan(same.relative_l2));
+  EXPECT_TRUE(std::isnan(same.psnr_db));
+  EXPECT_EQ(same.rmse, 0.0);
+  EXPECT_TRUE(to_json(same)["relative_l2"].is_null());
   img.pixels[1] = Rgb(0.5f);
   const ImageError e = image_error(img, zero);
-  EXPECT_TRUE(std::isinf(e.relative_l2));
-  EXPECT_TRUE(std::isinf(e.psnr_db) && e.psnr_db < 0);
+  EXPECT_TRUE(std::isnan(e.relative_l2));
+  EXPECT_TRUE(std::isnan(e.psnr_db));
+  EXPECT_NEAR(e.max_abs, 0.5, 1e-7);
+  EXPECT_EQ(warning_count(kZeroReferenceWarning), warned + 2);
 }
 
 TEST(ImageError, ViridisEndpointsAndLightness) {

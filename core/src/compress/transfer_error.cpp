@@ -96,7 +96,8 @@ FrobeniusError frobenius_error(const CompressedTransfer& ct, const TransferMatri
     out.standard_error =
         norm_sq > 0 && mean > 0 ? se_mean / (2.0 * std::sqrt(mean * norm_sq)) : 0.0;
   }
-  out.relative = relative_to(std::sqrt(std::max(sum, 0.0)), std::sqrt(norm_sq),
+  out.absolute = std::sqrt(std::max(sum, 0.0));
+  out.relative = relative_to(out.absolute, std::sqrt(norm_sq),
                              "relative Frobenius error of a compressed transfer");
   return out;
 }

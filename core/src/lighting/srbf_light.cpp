@@ -390,12 +390,14 @@ SrbfLight fit_scattered_srbf(const Cubemap& light, const ScatteredFitOptions& o,
   fit_srbf_coefficients(fit, light, o.ridge);
   const Samples s(light);
   ScatteredFitReport rep;
-  if (!(s.norm2 > 0))
-    // A black light has nothing to fit: the zero coefficients reproduce it, but its relative
-    // error is 0 / 0, not a perfect score, and the optimiser's scaled objective divides by it.
-    throw ParameterError(
-        "the light has no energy (every texel is zero or invalid): there is nothing to fit, "
-        "and a relative error against it is undefined");
+  if (!(s.norm2 > 0)) {
+    // A black light: the zero coefficients reproduce it exactly (a backend projecting a black
+    // light gets the zero light), but its relative error is 0 / 0, undefined rather than a
+    // perfect score, and the optimiser's scaled objective would divide by it.
+    rep.initial_error = rep.error = srbf_relative_error(fit, light);
+    if (report) *report = rep;
+    return fit;
+  }
   double error = srbf_relative_error(fit, light);
   rep.initial_error = error;
   for (int round = 1; round <= o.rounds; ++round) {

@@ -29,6 +29,7 @@ namespace prt {
 
 struct FrobeniusError {
   double relative = 0;        ///< ||T~ - T||_F / ||T||_F (NaN for T = 0: undefined)
+  double absolute = 0;        ///< ||T~ - T||_F (what is left to say when T = 0)
   double standard_error = 0;  ///< of `relative` (0 when exact)
   bool exact = false;         ///< all N columns probed
   int relights = 0;           ///< relights spent
