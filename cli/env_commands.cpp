@@ -199,8 +199,9 @@ void run_fit_srbf(const FitSrbfOptions& o) {
   double energy = 0;
   for (const Rgb& v : light.radiance) energy += static_cast<double>(v.x) + v.y + v.z;
   if (!(energy > 0))
-    throw InputError(file, "the map has no energy (every texel is zero or invalid): there is "
-                           "nothing to fit, and a relative error against it is undefined");
+    throw InputError(file,
+                     "the map has no energy (every texel is zero or invalid): there is "
+                     "nothing to fit, and a relative error against it is undefined");
   ScatteredFitOptions so;
   so.count = o.count;
   so.rounds = o.rounds;

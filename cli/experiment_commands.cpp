@@ -136,10 +136,10 @@ experiments::RunSummary run_one(const std::filesystem::path& file, const std::st
 // one-line summary (printed even with -q) after the result files are written.
 void check_run(const experiments::RunSummary& s) {
   if (s.failed == 0) return;
-  throw Error(fmt::format("{}: {} point{} failed, {} measured{} (first: {}; every failure is in {})",
-                          s.folder.string(), s.failed, s.failed == 1 ? "" : "s", s.points,
-                          s.complete ? "" : "; not marked complete", s.first_failure,
-                          (s.folder / "README.md").string()));
+  throw Error(fmt::format(
+      "{}: {} point{} failed, {} measured{} (first: {}; every failure is in {})", s.folder.string(),
+      s.failed, s.failed == 1 ? "" : "s", s.points, s.complete ? "" : "; not marked complete",
+      s.first_failure, (s.folder / "README.md").string()));
 }
 
 void print_run(const experiments::RunSummary& s, bool json) {
@@ -204,8 +204,8 @@ void run_file(const RunCli& o) {
     return;
   }
   // Parse and size before opening a device: a typo in the file costs nothing.
-  experiments::check_point_budget(experiments::parse_experiment(file, variant, registered_backends()),
-                                  o.max_points);
+  experiments::check_point_budget(
+      experiments::parse_experiment(file, variant, registered_backends()), o.max_points);
   auto ctx = open_device_from_options();
   const auto summary = run_one(file, variant, o, ctx ? &*ctx : nullptr);
   print_run(summary, o.json);

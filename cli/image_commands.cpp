@@ -11,16 +11,16 @@
 
 #include "commands.h"
 #include "provenance.h"
-#include "prtlab/storage/atomic_file.h"
-#include "prtlab/btf/scene_btfs.h"
-#include "prtlab/render/biscale_reference.h"
-#include "prtlab/storage/data_paths.h"
-#include "prtlab/lighting/environment_map.h"
 #include "prtlab/base/error.h"
+#include "prtlab/btf/scene_btfs.h"
+#include "prtlab/geometry/scene.h"
+#include "prtlab/image/image_io.h"
+#include "prtlab/lighting/environment_map.h"
+#include "prtlab/render/biscale_reference.h"
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/render/image_error.h"
-#include "prtlab/image/image_io.h"
-#include "prtlab/geometry/scene.h"
+#include "prtlab/storage/atomic_file.h"
+#include "prtlab/storage/data_paths.h"
 
 namespace prt::cli {
 namespace {
@@ -110,8 +110,8 @@ void run_diff(const DiffOptions& o) {
   std::printf("pixels         %zu%s\n", e.pixels,
               o.mask.empty() ? "" : fmt::format(" (mask {})", o.mask).c_str());
   std::printf("relative L2    %s\n", e.non_finite == 0 && e.peak <= 0 && std::isnan(e.relative_l2)
-                                          ? "undefined (the reference is zero)"
-                                          : format_metric(e.relative_l2, "{:.6g}").c_str());
+                                         ? "undefined (the reference is zero)"
+                                         : format_metric(e.relative_l2, "{:.6g}").c_str());
   std::printf("RMSE           %s\n", format_metric(e.rmse, "{:.6g}").c_str());
   std::printf("PSNR           %s dB (peak %s, the reference's largest value)\n",
               format_metric(e.psnr_db, "{:.2f}").c_str(), format_metric(e.peak, "{:.6g}").c_str());

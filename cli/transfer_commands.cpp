@@ -82,7 +82,8 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
   lights.push_back({env_file.stem().string(), std::move(cube)});
   const auto ev = evaluate_backend(
       *cr.compressed, t, lights, ctx ? &*ctx : nullptr,
-      {.repeats = o.repeat, .device_options = ParamSet::parse_assignments(o.device_params, "--device-param")});
+      {.repeats = o.repeat,
+       .device_options = ParamSet::parse_assignments(o.device_params, "--device-param")});
   if (!o.out.empty()) {
     LocalRadiance out;
     cr.compressed->relight(cr.compressed->project_light(lights.front().radiance), out);

@@ -395,10 +395,10 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   summary.failed = failures.size();
   for (const auto& f : failures) {
     if (!summary.first_failure.empty()) break;
-    summary.first_failure =
-        fmt::format("{} {}: {}", f["scene"].get<std::string>(),
-                    f["point"].get<std::string>().empty() ? "(scene)" : f["point"].get<std::string>(),
-                    f["error"].get<std::string>());
+    summary.first_failure = fmt::format(
+        "{} {}: {}", f["scene"].get<std::string>(),
+        f["point"].get<std::string>().empty() ? "(scene)" : f["point"].get<std::string>(),
+        f["error"].get<std::string>());
   }
   // A run that measured nothing is not complete: the folder keeps .started, and the next run
   // retries every point instead of skipping a folder of failures.

@@ -25,8 +25,8 @@
 #include <string>
 
 #include "experiment_spec.h"
-#include "run_plan.h"
 #include "prtlab/storage/stage_cache.h"
+#include "run_plan.h"
 
 namespace prt {
 class ClContext;
@@ -59,12 +59,12 @@ struct RunInterrupted : std::runtime_error {
 
 struct RunSummary {
   std::filesystem::path folder;
-  nlohmann::json result;  ///< what result.json holds
-  bool resumed = false;   ///< the folder held an interrupted run
-  std::size_t points = 0;  ///< points measured
-  std::size_t failed = 0;  ///< points (or scenes) that failed, each in result.json "failures"
+  nlohmann::json result;      ///< what result.json holds
+  bool resumed = false;       ///< the folder held an interrupted run
+  std::size_t points = 0;     ///< points measured
+  std::size_t failed = 0;     ///< points (or scenes) that failed, each in result.json "failures"
   std::string first_failure;  ///< "scene point: error" of the first failure, for one-line summaries
-  bool complete = false;  ///< .complete written: false when every point failed
+  bool complete = false;      ///< .complete written: false when every point failed
 };
 
 /// The result folder `spec` writes under `out_root`.

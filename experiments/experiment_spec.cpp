@@ -343,8 +343,9 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
                                                    "(each backend runs once; give one entry)",
                                                    listed[i]));
   if (listed.size() > 1 && std::ranges::count(listed, "*") > 0)
-    throw InputError(file, where + "'*' already lists every registered backend: give '*' alone, "
-                                   "or name the backends (use 'exclude' to leave some out)");
+    throw InputError(file, where +
+                               "'*' already lists every registered backend: give '*' alone, "
+                               "or name the backends (use 'exclude' to leave some out)");
   for (const auto& b : listed) {
     if (b == "*") {
       for (const auto& r : registered)

@@ -69,17 +69,17 @@ void check_point_budget(const ExperimentSpec& spec, std::size_t max_points) {
   if (n <= max_points) return;
   std::string per_backend;
   for (const auto& b : spec.backends)
-    per_backend += fmt::format("{}{} {}", per_backend.empty() ? "" : ", ", b,
-                               backend_points(spec, b));
-  throw InputError(spec.file,
-                   fmt::format("{} points ({} scene{} x {} scene-grid combination{} x {} a scene: "
-                               "{}), more than --max-points {}; shrink the grid or raise "
-                               "--max-points",
-                               n == kMax ? std::string("more than 2^64") : std::to_string(n),
-                               spec.scenes.size(), spec.scenes.size() == 1 ? "" : "s",
-                               scene_grid_combinations(spec),
-                               scene_grid_combinations(spec) == 1 ? "" : "s",
-                               points_per_scene(spec), per_backend, max_points));
+    per_backend +=
+        fmt::format("{}{} {}", per_backend.empty() ? "" : ", ", b, backend_points(spec, b));
+  throw InputError(
+      spec.file,
+      fmt::format("{} points ({} scene{} x {} scene-grid combination{} x {} a scene: "
+                  "{}), more than --max-points {}; shrink the grid or raise "
+                  "--max-points",
+                  n == kMax ? std::string("more than 2^64") : std::to_string(n), spec.scenes.size(),
+                  spec.scenes.size() == 1 ? "" : "s", scene_grid_combinations(spec),
+                  scene_grid_combinations(spec) == 1 ? "" : "s", points_per_scene(spec),
+                  per_backend, max_points));
 }
 
 RunPlan plan_run(const ExperimentSpec& spec, std::span<const SceneVariant> variants) {

@@ -1,6 +1,4 @@
 // Image error metrics (image_error.h) against hand-computed values, and the false-colour map.
-#include "prtlab/base/named_warning.h"
-#include "prtlab/base/relative_error.h"
 #include "prtlab/render/image_error.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +9,8 @@
 #include <string>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/base/relative_error.h"
 #include "prtlab/image/image_io.h"
 
 namespace prt {

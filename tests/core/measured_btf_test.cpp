@@ -792,7 +792,8 @@ TEST(UboBtf, AHugeDeclaredTexelCountIsRefusedWithoutAllocatingIt) {
     for (const char* signature : {"!FMF06FC", "!BDIF06R2!"}) {
       Bytes b;
       common_header(b, signature, {{0, 0}}, {{0, 0}}, side, side);
-      files.push_back(dir / ("x" + std::to_string(side) + "-" + std::to_string(files.size()) + ".btf"));
+      files.push_back(dir /
+                      ("x" + std::to_string(side) + "-" + std::to_string(files.size()) + ".btf"));
       b.save(files.back());
     }
   }

@@ -2,8 +2,6 @@
 // light that is exactly a sum of the fitted SRBFs; the scattered fit of a light made of a few
 // Gaussian lobes finds them (its error falls round by round) and beats uniform SRBFs with the
 // same parameter count; the uniform bandwidth reproduces the paper's configuration.
-#include "prtlab/base/named_warning.h"
-#include "prtlab/base/relative_error.h"
 #include "prtlab/lighting/srbf_light.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +10,8 @@
 #include <random>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
+#include "prtlab/base/relative_error.h"
 #include "prtlab/sphere/icosphere.h"
 
 namespace prt {

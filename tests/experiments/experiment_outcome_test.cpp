@@ -74,13 +74,15 @@ TEST_F(ExperimentOutcome, TypeAndRangeErrorsNameTheirLine) {
 }
 
 TEST_F(ExperimentOutcome, AnUnknownKindListsEveryKind) {
-  const std::string e = parse_error("name = \"x\"\nscenes = [\"bunny\"]\nkind = \"equal-storage\"\n");
+  const std::string e =
+      parse_error("name = \"x\"\nscenes = [\"bunny\"]\nkind = \"equal-storage\"\n");
   EXPECT_NE(e.find("line 3: unknown kind 'equal-storage'"), std::string::npos) << e;
   for (const auto& k : experiment_kinds()) EXPECT_NE(e.find(k), std::string::npos) << k;
 }
 
 TEST_F(ExperimentOutcome, ABackendListedTwiceOrBesideTheWildcardIsRefused) {
-  std::string e = parse_error("name = \"x\"\nscenes = [\"bunny\"]\nbackends = [\"haar\", \"haar\"]\n");
+  std::string e =
+      parse_error("name = \"x\"\nscenes = [\"bunny\"]\nbackends = [\"haar\", \"haar\"]\n");
   EXPECT_NE(e.find("line 3: backend 'haar' is listed twice"), std::string::npos) << e;
   e = parse_error("name = \"x\"\nscenes = [\"bunny\"]\nbackends = [\"*\", \"haar\"]\n");
   EXPECT_NE(e.find("'*' already lists every registered backend"), std::string::npos) << e;
@@ -100,16 +102,17 @@ TEST_F(ExperimentOutcome, ABackendWithAGridAndPointsIsRefusedAtItsLine) {
 }
 
 TEST_F(ExperimentOutcome, PointsAreCountedAndAHugeGridIsRefusedBeforeItRuns) {
-  const auto f = write("big.toml", "name = \"big\"\nkind = \"sweep\"\nscenes = "
-                                   "[\"tiny-sphere-plane\", \"bunny\"]\nbackends = [\"haar\", "
-                                   "\"uncompressed\"]\n[grid.haar]\nk = [" +
-                                       [] {
-                                         std::string s;
-                                         for (int i = 1; i <= 1000; ++i)
-                                           s += (i > 1 ? ", " : "") + std::to_string(i);
-                                         return s;
-                                       }() +
-                                       "]\nmax_terms = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]\n");
+  const auto f = write(
+      "big.toml",
+      "name = \"big\"\nkind = \"sweep\"\nscenes = "
+      "[\"tiny-sphere-plane\", \"bunny\"]\nbackends = [\"haar\", "
+      "\"uncompressed\"]\n[grid.haar]\nk = [" +
+          [] {
+            std::string s;
+            for (int i = 1; i <= 1000; ++i) s += (i > 1 ? ", " : "") + std::to_string(i);
+            return s;
+          }() +
+          "]\nmax_terms = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]\n");
   const ExperimentSpec spec = parse(f);
   EXPECT_EQ(points_per_scene(spec), 1000u * 10u + 1u);
   EXPECT_EQ(planned_points(spec), 2u * 10001u);
@@ -160,7 +163,8 @@ TEST_F(ExperimentOutcome, TheCountIsTheNumberOfPointsARunMeasures) {
 
 TEST_F(ExperimentOutcome, AnEnvironmentThatIsNotAMapFailsBeforeAnyStage) {
   const fs::path bad = write("notamap.exr", "not an exr");
-  const auto f = write("env.toml", std::string(kHead) + "environments = [\"" + bad.string() + "\"]\n");
+  const auto f =
+      write("env.toml", std::string(kHead) + "environments = [\"" + bad.string() + "\"]\n");
   const ExperimentSpec spec = parse(f);  // the file exists: the parser accepts the name
   try {
     (void)run_experiment(spec, options());
@@ -186,7 +190,10 @@ TEST_F(ExperimentOutcome, ARunWhereEveryPointFailedIsNotComplete) {
   EXPECT_NE(s.first_failure.find("broken"), std::string::npos) << s.first_failure;
   EXPECT_FALSE(fs::exists(s.folder / ".complete"));
   EXPECT_TRUE(fs::exists(s.folder / ".started"));
-  EXPECT_TRUE(fs::exists(s.folder / "README.md"));  // the failure is reported where people look
+  // The failure is recorded in the result (the CLI's report turns it into README.md).
+  ASSERT_TRUE(fs::exists(s.folder / "result.json"));
+  const auto result = nlohmann::json::parse(std::ifstream(s.folder / "result.json"));
+  EXPECT_EQ(result.at("failures").size(), 1u);
 }
 
 TEST_F(ExperimentOutcome, AMissingSceneIsNamedBeforeTheCompleteFolder) {
@@ -208,11 +215,12 @@ TEST_F(ExperimentOutcome, AMissingSceneIsNamedBeforeTheCompleteFolder) {
 
 TEST_F(ExperimentOutcome, FailedPointsMakeTheCommandFailWithOneLineEvenQuiet) {
   const std::string env = "PRTLAB_CACHE=\"" + (dir_ / "cache").string() + "\" ";
-  const auto f = write("partly.toml", "name = \"partly\"\nkind = \"sweep\"\nscenes = "
-                                      "[\"tiny-sphere-plane\", \"" +
-                                          broken_scene().string() +
-                                          "\"]\nbackends = [\"uncompressed\"]\nimages = false\n"
-                                          "timing = false\n");
+  const auto f = write("partly.toml",
+                       "name = \"partly\"\nkind = \"sweep\"\nscenes = "
+                       "[\"tiny-sphere-plane\", \"" +
+                           broken_scene().string() +
+                           "\"]\nbackends = [\"uncompressed\"]\nimages = false\n"
+                           "timing = false\n");
   const auto out = dir_ / "results";
   const auto r = run_cli("-q --no-opencl experiment run \"" + f.string() + "\" --no-plot --out \"" +
                              out.string() + "\"",
@@ -228,9 +236,10 @@ TEST_F(ExperimentOutcome, FailedPointsMakeTheCommandFailWithOneLineEvenQuiet) {
   EXPECT_EQ(big.exit_code, 1);
   EXPECT_NE(big.err.find("2 points"), std::string::npos) << big.err;
   // A malformed --device-param is named as such.
-  const auto dp = run_cli("-q --no-opencl compress tiny-sphere-plane --backend uncompressed "
-                          "--device-param oops",
-                          dir_, env);
+  const auto dp = run_cli(
+      "-q --no-opencl compress tiny-sphere-plane --backend uncompressed "
+      "--device-param oops",
+      dir_, env);
   EXPECT_NE(dp.exit_code, 0);
   EXPECT_NE(dp.err.find("--device-param 'oops': expected key=value"), std::string::npos) << dp.err;
 }

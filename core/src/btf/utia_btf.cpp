@@ -96,8 +96,10 @@ RgbImage read_png_linear(const fs::path& file) {
   if (bytes.size() >= 24 && std::equal(kSignature, kSignature + 8, bytes.begin()) &&
       std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR")) {
     const auto be32 = [&](std::size_t at) {
-      return static_cast<std::uint32_t>(bytes[at]) << 24 | static_cast<std::uint32_t>(bytes[at + 1]) << 16 |
-             static_cast<std::uint32_t>(bytes[at + 2]) << 8 | static_cast<std::uint32_t>(bytes[at + 3]);
+      return static_cast<std::uint32_t>(bytes[at]) << 24 |
+             static_cast<std::uint32_t>(bytes[at + 1]) << 16 |
+             static_cast<std::uint32_t>(bytes[at + 2]) << 8 |
+             static_cast<std::uint32_t>(bytes[at + 3]);
     };
     const std::uint64_t dw = be32(16), dh = be32(20);
     if (dw == 0 || dh == 0)

@@ -1,6 +1,5 @@
 #include "prtlab/render/image_error.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -75,8 +74,8 @@ ImageError image_error(const RgbImage& image, const RgbImage& reference,
   }
   const double inf = std::numeric_limits<double>::infinity();
   e.rmse = std::sqrt(sum_sq_diff / (3.0 * static_cast<double>(e.pixels)));
-  e.relative_l2 = relative_to(std::sqrt(sum_sq_diff), std::sqrt(sum_sq_ref),
-                              "relative L2 error of an image");
+  e.relative_l2 =
+      relative_to(std::sqrt(sum_sq_diff), std::sqrt(sum_sq_ref), "relative L2 error of an image");
   if (e.peak <= 0) {
     // A black reference has no peak: the PSNR is as undefined as the relative error.
     e.psnr_db = std::numeric_limits<double>::quiet_NaN();

@@ -1,6 +1,5 @@
 #include "prtlab/transfer/local_radiance.h"
 
-
 #include <algorithm>
 #include <cmath>
 
