@@ -1,5 +1,7 @@
 // The OpenCL relight of backend `haar` (compressors/haar/haar.cl): the light's transform, then
 // the rows' sparse dot products, both on the device; only the pixel light travels per relight.
+// A light the host has approximated in the wavelet basis (haar_light.h) travels as its N
+// coefficients and only the row kernel runs.
 #include <limits>
 
 #include "haar/haar.h"
@@ -125,9 +127,14 @@ class HaarDevice final : public DeviceRelighter {
   const cl::Buffer& output_buffer() const override { return out_; }
 
  private:
-  // Uploads the pixel light and transforms it on the device; returns kernel ms.
+  // Uploads the pixel light and transforms it on the device; returns kernel ms. A wavelet-basis
+  // light (the host's truncation, haar_light.h) is already what the row kernels read: it goes
+  // straight into the coefficient buffer and no kernel runs.
   double transform(const LightCoeffs& light) {
-    check_pixel_light(light, cols_, kName);
+    if (check_light(light, cols_)) {
+      upload_light(ctx_, coefficients_, light.values, light_host_, "haar light coefficients");
+      return 0.0;
+    }
     upload_light(ctx_, light_, light.values, light_host_, "haar light");
     cl::Event event =
         launch(ctx_, "haar.light", light_kernel_, LaunchRange::linear(cols_, kWorkGroup));
