@@ -157,8 +157,12 @@ void HaarTransfer::relight_vertices(const LightCoeffs& light,
   }
 }
 
-std::unique_ptr<DeviceRelighter> HaarTransfer::upload(ClContext& context, const ParamSet&) const {
-  return upload_haar(context, a_);
+std::unique_ptr<DeviceRelighter> HaarTransfer::upload(ClContext& context,
+                                                      const ParamSet& device_options) const {
+  return upload_haar(
+      context, a_,
+      device_options.get_enum<DeviceOrder>(
+          "opencl_order", {{"rows", DeviceOrder::kRows}, {"columns", DeviceOrder::kColumns}}));
 }
 
 void HaarTransfer::save(ArchiveWriter& archive) const {
@@ -363,6 +367,18 @@ CompressorEntry registry_entry() {
        1048576.0,
        {},
        "budget=global: most terms one row may get; 0: 8 k (and at most N)"},
+  };
+  e.device_params = {
+      {"opencl_order",
+       ParamType::kEnum,
+       "rows",
+       std::nullopt,
+       std::nullopt,
+       {"rows", "columns"},
+       "product order on the device: rows = one work-item per row over its stored terms; "
+       "columns = Ng 2003's order, one work-group per 2,048-row block reading only the columns "
+       "of the light's non-zero terms (a wavelet-basis light truncated to N terms reads N "
+       "columns); the column layout is derived at upload; no vertex-subset relight"},
   };
   e.size_knob =
       SizeKnob{"k", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 512.0, SizeKnob::Scale::kLog};

@@ -144,8 +144,15 @@ class HaarTransfer final : public CompressedTransfer {
   HaarArrays a_;
 };
 
+/// The device's product order (device option opencl_order): the same result up to float
+/// rounding either way.
+enum class DeviceOrder {
+  kRows,     ///< one work-item per row over its stored terms (every term, whatever the light)
+  kColumns,  ///< Ng 2003's order: only the columns of the light's non-zero terms (haar_columns.h)
+};
 /// The arrays resident on `context`'s device. The context must outlive the relighter.
-std::unique_ptr<DeviceRelighter> upload_haar(ClContext& context, const HaarArrays& arrays);
+std::unique_ptr<DeviceRelighter> upload_haar(ClContext& context, const HaarArrays& arrays,
+                                             DeviceOrder order = DeviceOrder::kRows);
 
 /// The registry entry (registered by haar.cpp).
 CompressorEntry registry_entry();

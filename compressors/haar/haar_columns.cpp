@@ -13,13 +13,13 @@ namespace {
 typedef float Float4 __attribute__((vector_size(16)));
 }  // namespace
 
-HaarColumns::HaarColumns(const HaarArrays& a)
-    : rows_(a.rows()),
-      cols_(static_cast<std::size_t>(a.pixel_count)),
-      blocks_((a.rows() + kBlockRows - 1) / kBlockRows),
-      offsets_(blocks_ * (cols_ + 1), 0),
-      rows_in_block_(a.terms()),
-      values_(a.terms()) {
+HaarColumns::HaarColumns(const HaarArrays& a, std::size_t block_rows)
+    : rows_(a.rows()), cols_(static_cast<std::size_t>(a.pixel_count)), block_rows_(block_rows) {
+  PRT_CHECK(block_rows >= 1 && block_rows <= 65536, "haar columns: {} rows a block", block_rows);
+  blocks_ = (rows_ + block_rows_ - 1) / block_rows_;
+  offsets_.assign(blocks_ * (cols_ + 1), 0);
+  rows_in_block_.resize(a.terms());
+  values_.resize(a.terms());
   if (a.format == ValueFormat::kS8) row_scales_ = a.row_scales;
   const auto index = [&](std::size_t i) -> std::uint32_t {
     return a.wide ? a.indices32[i] : a.indices16[i];
@@ -38,7 +38,7 @@ HaarColumns::HaarColumns(const HaarArrays& a)
   // Counting sort per block: column lengths, prefix sums, then the terms in row order, so each
   // column lists its rows rising.
   tbb::parallel_for(std::size_t{0}, blocks_, [&](std::size_t b) {
-    const std::size_t first = b * kBlockRows, last = std::min(rows_, first + kBlockRows);
+    const std::size_t first = b * block_rows_, last = std::min(rows_, first + block_rows_);
     std::uint32_t* off = &offsets_[b * (cols_ + 1)];
     for (std::uint32_t i = a.offsets[first]; i < a.offsets[last]; ++i) ++off[index(i) + 1];
     off[0] = a.offsets[first];
@@ -63,7 +63,7 @@ void HaarColumns::relight(const SparseLight& light, std::span<Rgb> out) const {
   for (std::size_t t = 0; t < l4.size(); ++t)
     l4[t] = Float4{light.values[t].x, light.values[t].y, light.values[t].z, 0.f};
   tbb::parallel_for(std::size_t{0}, blocks_, [&](std::size_t b) {
-    const std::size_t first = b * kBlockRows, last = std::min(rows_, first + kBlockRows);
+    const std::size_t first = b * block_rows_, last = std::min(rows_, first + block_rows_);
     std::vector<Float4> acc(last - first, Float4{0.f, 0.f, 0.f, 0.f});
     const std::uint32_t* off = &offsets_[b * (cols_ + 1)];
     for (std::size_t t = 0; t < light.indices.size(); ++t) {

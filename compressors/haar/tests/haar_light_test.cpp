@@ -3,7 +3,7 @@
 // holds exactly the N best coefficients of a brute-force ranking (coefficients and weights
 // computed here from the documented basis functions, not by the backend's transform); the relight
 // with it equals the dense product of the stored T~ with it (row and column order alike); the
-// device agrees with C++; bad lights are refused by name.
+// device agrees with C++ in both product orders; bad lights are refused by name.
 #include "haar/haar_light.h"
 
 #include <gtest/gtest.h>
@@ -239,6 +239,7 @@ TEST(HaarLight, TruncatedRelightIsTheDenseProductOfTheStoredTransfer) {
     const auto& h = dynamic_cast<const HaarTransfer&>(*ct);
     const HaarArrays& a = arrays(*ct);
     const HaarColumns columns(a);
+    const HaarColumns small_blocks(a, 7);  // rows split over many blocks
     for (std::size_t n : {1, 25, 100, 384}) {
       SCOPED_TRACE(::testing::Message() << "N = " << n);
       const LightCoeffs l = h.project_light(env, {n, LightWeight::kSolidAngle});
@@ -246,8 +247,11 @@ TEST(HaarLight, TruncatedRelightIsTheDenseProductOfTheStoredTransfer) {
       ct->relight(l, rows);
       const SparseLight sparse = sparse_terms(l.values);
       ASSERT_LE(sparse.indices.size(), n);
-      std::vector<Rgb> by_columns(a.rows());
+      std::vector<Rgb> by_columns(a.rows()), by_small_blocks(a.rows());
       columns.relight(sparse, by_columns);
+      small_blocks.relight(sparse, by_small_blocks);
+      EXPECT_EQ(std::memcmp(by_columns.data(), by_small_blocks.data(), a.rows() * sizeof(Rgb)), 0)
+          << "the block size changed a sum";
       std::uint64_t touched = 0;
       // The stored T~ as a dense matrix of wavelet coefficients times the truncated light.
       for (std::size_t row = 0; row < a.rows(); ++row) {
@@ -270,6 +274,7 @@ TEST(HaarLight, TruncatedRelightIsTheDenseProductOfTheStoredTransfer) {
               std::binary_search(sparse.indices.begin(), sparse.indices.end(), stored_index(a, i));
       }
       EXPECT_EQ(columns.touched_terms(sparse), touched);
+      EXPECT_EQ(small_blocks.touched_terms(sparse), touched);
       if (n == 384) {
         EXPECT_EQ(touched, a.terms());
       }
@@ -294,39 +299,57 @@ TEST(HaarLight, RefusesALightOfAnotherBasisOrSize) {
   }
 }
 
-TEST(HaarLight, OpenClMatchesTheCppRelightOfATruncatedLight) {
+TEST(HaarLight, OpenClMatchesTheCppRelightOfATruncatedLightInBothOrders) {
   ClContext* ctx = default_context();
   if (ctx == nullptr) GTEST_SKIP() << "no OpenCL device";
-  const TransferMatrix t = test_transfer(16, 8);
-  const Cubemap env = test_environment(16, 4);
-  const std::vector<std::uint32_t> subset = {0, 3, 4, 11};
-  for (const Params& p : kVariants) {
-    const auto ct = compress(t, p);
-    const auto& h = dynamic_cast<const HaarTransfer&>(*ct);
-    auto device = upload_compressed(*ct, *ctx);
-    ASSERT_NE(device, nullptr);
-    for (std::size_t n : {25, 200, 0}) {
-      SCOPED_TRACE(::testing::Message() << "N = " << n);
-      const LightCoeffs l = h.project_light(env, {n, LightWeight::kFaceArea});
-      LocalRadiance cpp, gpu;
-      ct->relight(l, cpp);
-      device->relight(l, gpu);
+  // R = 16 and 48 rows; R = 4 and 2,400 rows, more than one 2,048-row column block.
+  for (const auto& [r, vertices] :
+       {std::pair{16, std::size_t{12}}, std::pair{4, std::size_t{600}}}) {
+    const TransferMatrix t = random_transfer(8, RandomTransferSpec{vertices, 2, r, 3, 0.5, {5}});
+    const Cubemap env = test_environment(r, 4);
+    const std::vector<std::uint32_t> subset = {0, 3, 4, 11};
+    for (const Params& p : kVariants) {
+      const auto ct = compress(t, p);
+      const auto& h = dynamic_cast<const HaarTransfer&>(*ct);
+      auto device = upload_compressed(*ct, *ctx);
+      ASSERT_NE(device, nullptr);
+      auto by_columns = upload_compressed(*ct, *ctx, {{"opencl_order", "columns"}});
+      ASSERT_NE(by_columns, nullptr);
+      EXPECT_FALSE(by_columns->supports_vertex_subset());
+      const HaarColumns columns(arrays(*ct), 2048);
+      for (std::size_t n : {25, 200, 0}) {
+        SCOPED_TRACE(::testing::Message() << "N = " << n);
+        const LightCoeffs l = h.project_light(env, {n, LightWeight::kFaceArea});
+        LocalRadiance cpp, gpu, gpu_columns;
+        ct->relight(l, cpp);
+        device->relight(l, gpu);
+        EXPECT_LE(max_relative_error(gpu, cpp), 1e-5);
+        // The column kernel sums in the C++ column product's order (columns rising, each block's
+        // rows apart): within float rounding of it and of the row order.
+        by_columns->relight(l, gpu_columns);
+        LocalRadiance cpp_columns(RadianceBasis::kPixel, cpp.dim, cpp.vertices);
+        columns.relight(sparse_terms(l.values), cpp_columns.values);
+        EXPECT_LE(max_relative_error(gpu_columns, cpp_columns), 1e-6);
+        EXPECT_LE(max_relative_error(gpu_columns, cpp), 1e-5);
+        device->set_vertex_subset(subset);
+        EXPECT_GE(device->relight_subset_on_device(l), 0.0);
+        std::vector<Rgb> after(gpu.values.size());
+        download(*ctx, device->output_buffer(), std::span<Rgb>(after), "haar light test output");
+        const std::size_t m = t.local_count();
+        for (std::uint32_t v : subset)
+          for (std::size_t j = 0; j < m; ++j)
+            ASSERT_EQ(std::memcmp(&after[v * m + j], &gpu.values[v * m + j], sizeof(Rgb)), 0);
+      }
+      // Back to a pixel light: the device transforms it again (nothing of the last one stays),
+      // and the column order reads every column.
+      LocalRadiance cpp, gpu, gpu_columns;
+      const LightCoeffs pixel = ct->project_light(env);
+      ct->relight(pixel, cpp);
+      device->relight(pixel, gpu);
+      by_columns->relight(pixel, gpu_columns);
       EXPECT_LE(max_relative_error(gpu, cpp), 1e-5);
-      device->set_vertex_subset(subset);
-      EXPECT_GE(device->relight_subset_on_device(l), 0.0);
-      std::vector<Rgb> after(gpu.values.size());
-      download(*ctx, device->output_buffer(), std::span<Rgb>(after), "haar light test output");
-      const std::size_t m = t.local_count();
-      for (std::uint32_t v : subset)
-        for (std::size_t j = 0; j < m; ++j)
-          ASSERT_EQ(std::memcmp(&after[v * m + j], &gpu.values[v * m + j], sizeof(Rgb)), 0);
+      EXPECT_LE(max_relative_error(gpu_columns, cpp), 1e-5);
     }
-    // Back to a pixel light: the device transforms it again (nothing of the last one stays).
-    LocalRadiance cpp, gpu;
-    const LightCoeffs pixel = ct->project_light(env);
-    ct->relight(pixel, cpp);
-    device->relight(pixel, gpu);
-    EXPECT_LE(max_relative_error(gpu, cpp), 1e-5);
   }
 }
 
