@@ -6,7 +6,7 @@
 writes, beside points.csv: errors.png (L* and image error against the light's term count N, one
 line per per-row budget k, one panel per environment; solid-angle weights), weights.png (the
 three light weights at the largest k), times.png (relight time against N: C++ row product,
-C++ column product, OpenCL row kernel, projection) and tables.md (the numbers the README quotes).
+C++ column product, OpenCL row and column kernels, projection) and tables.md (the numbers the README quotes).
 """
 import csv
 import math
@@ -100,7 +100,9 @@ def main(folder):
         sel = [r for r in rows if int(r["k"]) == k and r["weight"] == "solid_angle"]
         ns = sorted({n_value(r, n_all) for r in sel})
         for key, label in [("cpp_rows_ms", "C++ rows"), ("cpp_columns_ms", "C++ columns (Ng)"),
-                           ("opencl_ms", "OpenCL rows (PoCL)"), ("project_ms", "projection")]:
+                           ("opencl_ms", "OpenCL rows (PoCL)"),
+                           ("opencl_columns_ms", "OpenCL columns (PoCL)"),
+                           ("project_ms", "projection")]:
             ys = []
             for n in ns:
                 vals = sorted(num(r, key) for r in sel if n_value(r, n_all) == n)
@@ -135,9 +137,9 @@ def main(folder):
         out.append("")
     out.append(f"### {scene}: ms per relight against N (median over the environments; solid-angle weights)")
     out.append("")
-    out.append("| k | stored terms | N | C++ rows | C++ columns (Ng) | OpenCL rows | projection | "
-               "terms read by columns |")
-    out.append("|---|---|---|---|---|---|---|---|")
+    out.append("| k | stored terms | N | C++ rows | C++ columns (Ng) | OpenCL rows | OpenCL columns | "
+               "projection | terms read by columns |")
+    out.append("|---|---|---|---|---|---|---|---|---|")
     for k in ks:
         sel_k = [r for r in rows if int(r["k"]) == k and r["weight"] == "solid_angle"]
         stored = int(sel_k[0]["stored_terms"])
@@ -152,7 +154,8 @@ def main(folder):
             share = sorted(int(r["touched_terms"]) / stored for r in sel)[len(sel) // 2]
             out.append(f"| {k} | {stored:,} | {label} | {med('cpp_rows_ms'):.2f} | "
                        f"{med('cpp_columns_ms'):.2f} | {med('opencl_ms'):.2f} | "
-                       f"{med('project_ms'):.3f} | {100 * share:.0f} % |")
+                       f"{med('opencl_columns_ms'):.2f} | {med('project_ms'):.3f} | "
+                       f"{100 * share:.0f} % |")
     out.append("")
     out.append(f"### {scene}: image error by light weight (solid angle / face area / none)")
     out.append("")
