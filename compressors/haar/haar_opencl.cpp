@@ -1,7 +1,8 @@
 // The OpenCL relight of backend `haar` (compressors/haar/haar.cl): the light's transform, then
 // the rows' sparse dot products, both on the device; only the pixel light travels per relight.
 // A light the host has approximated in the wavelet basis (haar_light.h) travels as its N
-// coefficients and only the row kernel runs.
+// coefficients and only the product kernel runs: the row kernel, or with opencl_order=columns
+// the column kernel over the light's non-zero terms (haar_columns.h).
 #include <limits>
 #include <numeric>
 
@@ -96,7 +97,7 @@ class HaarDevice final : public DeviceRelighter {
       // The column layout replaces the row arrays on the device (derived here, never stored).
       const HaarColumns columns(a, kColumnBlockRows);
       blocks_ = columns.blocks();
-      offsets_ = upload(ctx, columns.offsets(), "haar column offsets");
+      offsets_ = upload_or_dummy(columns.offsets(), "haar column offsets");
       indices_ = upload_or_dummy(columns.rows_in_block(), "haar column rows");
       values_ = upload_or_dummy(columns.values(), "haar column values");
       std::vector<std::uint32_t> every(cols_);
