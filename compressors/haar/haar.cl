@@ -7,8 +7,14 @@
 //   haar_rows_<format>   one work-item per row: four float4 accumulators combined as
 //                        (a0 + a1) + (a2 + a3), the order of the C++ reference (haar_relight.cpp)
 //   haar_rows_<format>_vertices   the rows of a vertex subset only (the frame loop's culling)
+//   haar_columns         device option opencl_order=columns, Ng 2003's order: one work-group per
+//                        block of PRT_BLOCK_ROWS rows (haar_columns.h), the block's sums in local
+//                        memory; for each listed light term, the work-items add the block's
+//                        entries of that column (distinct rows: no two items hit one row), then
+//                        a barrier before the next column. Only the listed columns are read.
 //
-// Host defines: PRT_RES (R, a power of two), PRT_INDEX_T (ushort or uint), PRT_WG_SIZE. Lights
+// Host defines: PRT_RES (R, a power of two), PRT_INDEX_T (ushort or uint), PRT_WG_SIZE,
+// PRT_BLOCK_ROWS (rows a column block holds; its float4 sums must fit local memory). Lights
 // are float4 (RGB + pad); the output is packed RGB (3 floats per row), prt::LocalRadiance.
 
 #ifndef PRT_RES
@@ -16,6 +22,9 @@
 #endif
 #ifndef PRT_INDEX_T
 #define PRT_INDEX_T ushort
+#endif
+#ifndef PRT_BLOCK_ROWS
+#define PRT_BLOCK_ROWS 2048
 #endif
 
 float4 haar_block_sum(__global const float4* restrict face, const int x0, const int y0,
@@ -111,3 +120,29 @@ HAAR_ROWS_KERNEL(haar_rows_s8, HAAR_FULL_ARGS, HAAR_FULL_ROW, char, HAAR_S8, 1)
 HAAR_ROWS_KERNEL(haar_rows_f32_vertices, HAAR_SUBSET_ARGS, HAAR_SUBSET_ROW, float, HAAR_F32, 0)
 HAAR_ROWS_KERNEL(haar_rows_f16_vertices, HAAR_SUBSET_ARGS, HAAR_SUBSET_ROW, half, HAAR_F16, 0)
 HAAR_ROWS_KERNEL(haar_rows_s8_vertices, HAAR_SUBSET_ARGS, HAAR_SUBSET_ROW, char, HAAR_S8, 1)
+
+__kernel PRT_WG_ATTR void haar_columns(const uint rows, const uint cols, const uint kept_count,
+                                       __global const uint* restrict kept,
+                                       __global const float4* restrict light,
+                                       __global const uint* restrict offsets,
+                                       __global const ushort* restrict block_rows,
+                                       __global const float* restrict values,
+                                       __global const float* restrict row_scales,
+                                       const uint scaled, __global float* restrict out) {
+  __local float4 acc[PRT_BLOCK_ROWS];
+  const uint lid = get_local_id(0);
+  const uint first = get_group_id(0) * PRT_BLOCK_ROWS;
+  const uint count = min((uint)PRT_BLOCK_ROWS, rows - first);
+  for (uint r = lid; r < count; r += PRT_WG_SIZE) acc[r] = (float4)(0.0f);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  __global const uint* off = offsets + (size_t)get_group_id(0) * (cols + 1);
+  for (uint t = 0; t < kept_count; ++t) {
+    const uint j = kept[t];
+    const float4 l = light[j];
+    const uint end = off[j + 1];
+    for (uint e = off[j] + lid; e < end; e += PRT_WG_SIZE) acc[block_rows[e]] += values[e] * l;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  for (uint r = lid; r < count; r += PRT_WG_SIZE)
+    prt_store_rgb3(out, first + r, scaled ? acc[r] * row_scales[first + r] : acc[r]);
+}

@@ -56,6 +56,16 @@ ValueFormat format_from(std::string_view name) {
 
 }  // namespace
 
+bool check_light(const LightCoeffs& light, std::size_t pixels) {
+  const bool wavelet = light.basis == kLightBasis;
+  if ((!wavelet && light.basis != "pixel") || light.values.size() != pixels)
+    throw ParameterError(
+        fmt::format("{}: relight needs a light of N = {} values in basis 'pixel' or '{}' (its Haar "
+                    "coefficients), got basis '{}' with {}",
+                    kName, pixels, kLightBasis, light.basis, light.values.size()));
+  return wavelet;
+}
+
 std::string_view to_string(ValueFormat f) {
   switch (f) {
     case ValueFormat::kFloat32:
@@ -118,23 +128,41 @@ LightCoeffs HaarTransfer::project_light(const Cubemap& radiance) const {
   return pixel_light(radiance, static_cast<std::size_t>(a_.pixel_count), kName);
 }
 
+LightCoeffs HaarTransfer::project_light(const Cubemap& radiance,
+                                        const LightApproximation& approximation) const {
+  const LightCoeffs pixels = project_light(radiance);
+  return approximate_light(pixels.values, CubemapLayout(a_.resolution), approximation);
+}
+
 void HaarTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
-  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
+  const bool wavelet = check_light(light, static_cast<std::size_t>(a_.pixel_count));
   out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  relight_haar(a_, light.values, out.values);
+  if (wavelet) {
+    relight_haar_wavelet(a_, light.values, out.values);
+  } else {
+    relight_haar(a_, light.values, out.values);
+  }
 }
 
 void HaarTransfer::relight_vertices(const LightCoeffs& light,
                                     std::span<const std::uint32_t> vertices,
                                     LocalRadiance& out) const {
-  check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
+  const bool wavelet = check_light(light, static_cast<std::size_t>(a_.pixel_count));
   check_vertex_subset(vertices, a_.vertices, kName);
   out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
-  relight_haar_vertices(a_, light.values, vertices, out.values);
+  if (wavelet) {
+    relight_haar_wavelet_vertices(a_, light.values, vertices, out.values);
+  } else {
+    relight_haar_vertices(a_, light.values, vertices, out.values);
+  }
 }
 
-std::unique_ptr<DeviceRelighter> HaarTransfer::upload(ClContext& context, const ParamSet&) const {
-  return upload_haar(context, a_);
+std::unique_ptr<DeviceRelighter> HaarTransfer::upload(ClContext& context,
+                                                      const ParamSet& device_options) const {
+  return upload_haar(
+      context, a_,
+      device_options.get_enum<DeviceOrder>(
+          "opencl_order", {{"rows", DeviceOrder::kRows}, {"columns", DeviceOrder::kColumns}}));
 }
 
 void HaarTransfer::save(ArchiveWriter& archive) const {
@@ -339,6 +367,18 @@ CompressorEntry registry_entry() {
        1048576.0,
        {},
        "budget=global: most terms one row may get; 0: 8 k (and at most N)"},
+  };
+  e.device_params = {
+      {"opencl_order",
+       ParamType::kEnum,
+       "rows",
+       std::nullopt,
+       std::nullopt,
+       {"rows", "columns"},
+       "product order on the device: rows = one work-item per row over its stored terms; "
+       "columns = Ng 2003's order, one work-group per 2,048-row block reading only the columns "
+       "of the light's non-zero terms (a wavelet-basis light truncated to N terms reads N "
+       "columns); the column layout is derived at upload; no vertex-subset relight"},
   };
   e.size_knob =
       SizeKnob{"k", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 512.0, SizeKnob::Scale::kLog};

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "haar/haar_light.h"
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/transfer/transfer_matrix.h"
@@ -98,6 +99,15 @@ void relight_haar(const HaarArrays& a, std::span<const Rgb> light, std::span<Rgb
 /// other rows of out are not written.
 void relight_haar_vertices(const HaarArrays& a, std::span<const Rgb> light,
                            std::span<const std::uint32_t> vertices, std::span<Rgb> out);
+/// Whether `light` is a wavelet-basis light (kLightBasis); ParameterError unless it is that or a
+/// pixel light, of `pixels` values.
+bool check_light(const LightCoeffs& light, std::size_t pixels);
+/// out = T~ L for a light given as its Haar coefficients (W L, or the truncation of it that
+/// approximate_light makes: haar_light.h), with relight_haar's row sums.
+void relight_haar_wavelet(const HaarArrays& a, std::span<const Rgb> coefficients,
+                          std::span<Rgb> out);
+void relight_haar_wavelet_vertices(const HaarArrays& a, std::span<const Rgb> coefficients,
+                                   std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
 class HaarTransfer final : public CompressedTransfer {
  public:
@@ -117,6 +127,11 @@ class HaarTransfer final : public CompressedTransfer {
   std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error(); }
   /// The pixel-basis light: the Haar transform is part of every relight (C++ and OpenCL).
   LightCoeffs project_light(const Cubemap& radiance) const override;
+  /// Ng 2003's run-time approximation of the light: its Haar coefficients, only the best
+  /// `approximation.terms` kept (haar_light.h), as a light in the wavelet basis (kLightBasis).
+  /// The archive does not depend on it; with every term the relight has project_light's bits.
+  LightCoeffs project_light(const Cubemap& radiance, const LightApproximation& approximation) const;
+  /// A pixel light (transformed here) or a wavelet-basis light (multiplied as it is).
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   bool supports_vertex_subset() const override { return true; }
   void relight_vertices(const LightCoeffs& light, std::span<const std::uint32_t> vertices,
@@ -129,8 +144,15 @@ class HaarTransfer final : public CompressedTransfer {
   HaarArrays a_;
 };
 
+/// The device's product order (device option opencl_order): the same result up to float
+/// rounding either way.
+enum class DeviceOrder {
+  kRows,     ///< one work-item per row over its stored terms (every term, whatever the light)
+  kColumns,  ///< Ng 2003's order: only the columns of the light's non-zero terms (haar_columns.h)
+};
 /// The arrays resident on `context`'s device. The context must outlive the relighter.
-std::unique_ptr<DeviceRelighter> upload_haar(ClContext& context, const HaarArrays& arrays);
+std::unique_ptr<DeviceRelighter> upload_haar(ClContext& context, const HaarArrays& arrays,
+                                             DeviceOrder order = DeviceOrder::kRows);
 
 /// The registry entry (registered by haar.cpp).
 CompressorEntry registry_entry();

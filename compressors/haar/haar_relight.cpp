@@ -84,15 +84,36 @@ void with_row_sum(const HaarArrays& a, const Float4* light, const Fn& fn) {
   }
 }
 
-std::vector<Float4> transformed_light4(const HaarArrays& a, std::span<const Rgb> light,
-                                       std::size_t out) {
-  PRT_CHECK(light.size() == static_cast<std::size_t>(a.pixel_count) && out == a.rows(),
-            "haar relight: light {} / output {} values for {} rows x {} columns", light.size(), out,
-            a.rows(), a.pixel_count);
-  const std::vector<Rgb> w = transform_light(light, a.resolution);
-  std::vector<Float4> l4(w.size());
-  for (std::size_t k = 0; k < w.size(); ++k) l4[k] = Float4{w[k].x, w[k].y, w[k].z, 0.f};
+std::vector<Float4> light4(const HaarArrays& a, std::span<const Rgb> coefficients,
+                           std::size_t out) {
+  PRT_CHECK(coefficients.size() == static_cast<std::size_t>(a.pixel_count) && out == a.rows(),
+            "haar relight: light {} / output {} values for {} rows x {} columns",
+            coefficients.size(), out, a.rows(), a.pixel_count);
+  std::vector<Float4> l4(coefficients.size());
+  for (std::size_t k = 0; k < coefficients.size(); ++k)
+    l4[k] = Float4{coefficients[k].x, coefficients[k].y, coefficients[k].z, 0.f};
   return l4;
+}
+
+void relight_rows(const HaarArrays& a, const std::vector<Float4>& l4, std::span<Rgb> out) {
+  with_row_sum(a, l4.data(), [&](const auto& sum) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.rows(), 1024), [&](const auto& r) {
+      for (std::size_t row = r.begin(); row < r.end(); ++row) out[row] = sum(row);
+    });
+  });
+}
+
+void relight_rows_of(const HaarArrays& a, const std::vector<Float4>& l4,
+                     std::span<const std::uint32_t> vertices, std::span<Rgb> out) {
+  const auto m = static_cast<std::size_t>(a.local_count);
+  with_row_sum(a, l4.data(), [&](const auto& sum) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size(), 16), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        const std::size_t v = vertices[i];
+        for (std::size_t j = 0; j < m; ++j) out[v * m + j] = sum(v * m + j);
+      }
+    });
+  });
 }
 
 }  // namespace
@@ -109,26 +130,26 @@ std::vector<Rgb> transform_light(std::span<const Rgb> light, int resolution) {
 }
 
 void relight_haar(const HaarArrays& a, std::span<const Rgb> light, std::span<Rgb> out) {
-  const std::vector<Float4> l4 = transformed_light4(a, light, out.size());
-  with_row_sum(a, l4.data(), [&](const auto& sum) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.rows(), 1024), [&](const auto& r) {
-      for (std::size_t row = r.begin(); row < r.end(); ++row) out[row] = sum(row);
-    });
-  });
+  PRT_CHECK(light.size() == static_cast<std::size_t>(a.pixel_count),
+            "haar relight: light {} values for {} columns", light.size(), a.pixel_count);
+  relight_rows(a, light4(a, transform_light(light, a.resolution), out.size()), out);
 }
 
 void relight_haar_vertices(const HaarArrays& a, std::span<const Rgb> light,
                            std::span<const std::uint32_t> vertices, std::span<Rgb> out) {
-  const std::vector<Float4> l4 = transformed_light4(a, light, out.size());
-  const auto m = static_cast<std::size_t>(a.local_count);
-  with_row_sum(a, l4.data(), [&](const auto& sum) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size(), 16), [&](const auto& r) {
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        const std::size_t v = vertices[i];
-        for (std::size_t j = 0; j < m; ++j) out[v * m + j] = sum(v * m + j);
-      }
-    });
-  });
+  PRT_CHECK(light.size() == static_cast<std::size_t>(a.pixel_count),
+            "haar relight: light {} values for {} columns", light.size(), a.pixel_count);
+  relight_rows_of(a, light4(a, transform_light(light, a.resolution), out.size()), vertices, out);
+}
+
+void relight_haar_wavelet(const HaarArrays& a, std::span<const Rgb> coefficients,
+                          std::span<Rgb> out) {
+  relight_rows(a, light4(a, coefficients, out.size()), out);
+}
+
+void relight_haar_wavelet_vertices(const HaarArrays& a, std::span<const Rgb> coefficients,
+                                   std::span<const std::uint32_t> vertices, std::span<Rgb> out) {
+  relight_rows_of(a, light4(a, coefficients, out.size()), vertices, out);
 }
 
 }  // namespace prt::haar
