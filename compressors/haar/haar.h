@@ -17,6 +17,7 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::haar {
@@ -99,7 +100,7 @@ void relight_haar(const HaarArrays& a, std::span<const Rgb> light, std::span<Rgb
 void relight_haar_vertices(const HaarArrays& a, std::span<const Rgb> light,
                            std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
-class HaarTransfer final : public CompressedTransfer {
+class HaarTransfer final : public CompressedTransfer, public StoredModel {
  public:
   explicit HaarTransfer(HaarArrays arrays) : a_(std::move(arrays)) {}
   /// The state written by save() (InputError naming the file when it is inconsistent).
@@ -115,6 +116,9 @@ class HaarTransfer final : public CompressedTransfer {
   /// None: dropping terms bounds ||T~ - T||_F, not ||T~ L - T L|| / ||T L||.
   double declared_error_bound() const override { return kNoErrorBound; }
   std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error(); }
+  /// Every row's kept terms (decoded, double) inverse-transformed to the pixel basis and dotted
+  /// with L; the magnitude sums |c_j| times |psi_j| |L| over the terms.
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   /// The pixel-basis light: the Haar transform is part of every relight (C++ and OpenCL).
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;

@@ -301,7 +301,11 @@ TEST(SrbfCta, StoredErrorsMatchADenseRecomputation) {
   for (const char* precision : {"float32", "float16"}) {
     const auto ct = compress(
         t,
-        {{"clusters", "3"}, {"rank_light", "6"}, {"rank_vertex", "3"}, {"precision", precision}});
+        {{"clusters", "3"},
+         {"rank_light", "6"},
+         {"rank_vertex", "3"},
+         {"precision", precision},
+         {"light", "pixel"}});
     const SrbfCtaArrays& a = arrays(*ct);
     const double direct = (reconstructed(a) - td).norm() / td.norm();
     EXPECT_NEAR(a.frobenius_error, direct, 1e-5) << precision;
@@ -315,7 +319,11 @@ TEST(SrbfCta, FullRankCtaIsExactlyTheSrbfProjection) {
   // One cluster, every SRBF, vertex rank = the vertex count: CTA keeps the tensor whole.
   const auto ct = compress(
       t,
-      {{"clusters", "1"}, {"rank_light", "42"}, {"rank_vertex", "24"}, {"precision", "float32"}});
+      {{"clusters", "1"},
+       {"rank_light", "42"},
+       {"rank_vertex", "24"},
+       {"precision", "float32"},
+       {"light", "pixel"}});
   const SrbfCtaArrays& a = arrays(*ct);
   EXPECT_NEAR(a.frobenius_error, a.srbf_frobenius_error, 1e-5);
   // The SRBF projection itself, independently: each row by regularised least squares.
