@@ -2,12 +2,14 @@
 // basis from its cluster's representatives and its weights as stored, then dotted with the
 // light, in double. The relight associates the other way (the light's dot with each
 // representative first, then the per-row blend), so the two share no code.
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
 
 #include "cpca/cpca.h"
+#include "prtlab/base/error.h"
 
 namespace prt::cpca {
 

@@ -503,8 +503,8 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
       clusters == 0 || clusters > std::max<std::size_t>(a.vertices, 1))
     throw fail(fmt::format("bad shape: order {}, output order {}, {} clusters for {} vertices",
                            a.order, a.output_order, clusters, a.vertices));
-  if (!(std::isfinite(a.signal_error) && a.signal_error >= 0 &&
-        std::isfinite(a.frobenius_error) && a.frobenius_error >= 0))
+  if (!(std::isfinite(a.signal_error) && a.signal_error >= 0 && std::isfinite(a.frobenius_error) &&
+        a.frobenius_error >= 0))
     throw fail("the signal or the model's Frobenius error is not a finite non-negative number");
   const int side = static_cast<int>(std::lround(std::sqrt(std::max(a.local_count, 0))));
   if (a.local_count < 1 || side * side != a.local_count)

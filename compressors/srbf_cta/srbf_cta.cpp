@@ -281,9 +281,8 @@ class SrbfCtaCompressor final : public Compressor {
         "clustering {:.1f} s ({} iterations), approximation {:.1f} s ({} iterations), error "
         "{:.1f} s; relative Frobenius error: SRBF {:.4f}, SRBF + CTA {:.4f}",
         kName, model.clusters.size(), out->arrays().rank_view, out->arrays().rank_light,
-        out->arrays().rank_vertex, proj.seconds,
-        model.times.initialisation, model.times.clustering, model.clustering_iterations,
-        model.times.approximation, model.approximation_iterations,
+        out->arrays().rank_vertex, proj.seconds, model.times.initialisation, model.times.clustering,
+        model.clustering_iterations, model.times.approximation, model.approximation_iterations,
         std::chrono::duration<double>(Clock::now() - t0).count(),
         out->arrays().srbf_frobenius_error, out->arrays().frobenius_error);
     progress.finish();

@@ -108,7 +108,8 @@ class SrbfCtaTransfer final : public CompressedTransfer, public StoredModel {
   /// Sets the declared error: the stored model through light_operator() against `t` (the
   /// compressor calls it once, with the T it compressed).
   void declare_model_error(const TransferMatrix& t);
-  /// Per vertex U K_x U_c^T (K_x = refold(W_x V_c), double) times L' of light_products().
+  /// Per vertex U K_x (U_c^T L'), K_x = refold(W_x V_c) rebuilt in double, L' of
+  /// light_products().
   ModelRadiance model_radiance(const Cubemap& radiance) const override;
   /// L' (n_t x 3, double): what project_light() rounds to float.
   Eigen::MatrixXd light_products(const Cubemap& radiance) const;

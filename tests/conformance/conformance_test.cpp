@@ -379,6 +379,7 @@ TEST_P(Conformance, SaveLoadRoundTripIsIdentical) {
   EXPECT_EQ(loaded->flops_per_relight(), ct.flops_per_relight());
   EXPECT_EQ(loaded->declared_error_bound(), ct.declared_error_bound());
   EXPECT_EQ(loaded->declared_error_norm(), ct.declared_error_norm());
+  EXPECT_EQ(loaded->expected_frobenius_error(), ct.expected_frobenius_error());
   EXPECT_EQ(loaded->output_basis(), ct.output_basis());
   for (std::size_t l = 0; l < data().lights.size(); ++l) {
     SCOPED_TRACE(::testing::Message() << "light " << l);

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iterator>
+#include <memory>
 
 #include "prtlab/compress/compressor_registry.h"
 #include "support/accuracy_checks.h"
@@ -18,7 +20,7 @@
 namespace prt::conformance {
 namespace {
 
-const auto g_cache_root = prt::testing::use_private_cache("lossy_perturbation");
+[[maybe_unused]] const auto g_cache_root = prt::testing::use_private_cache("lossy_perturbation");
 
 using testing::Perturbation;
 
@@ -35,11 +37,15 @@ std::vector<std::string> lossy_backends() {
 
 std::unique_ptr<CompressedTransfer> compress(const std::string& backend, const CaseData& c) {
   const auto& entry = CompressorRegistry::instance().get(backend);
-  return CompressorRegistry::instance().create(backend, {})->compress(c.input(entry),
-                                                                      Progress::null());
+  return CompressorRegistry::instance()
+      .create(backend, {})
+      ->compress(c.input(entry), Progress::null());
 }
 
 class LossyPerturbation : public ::testing::TestWithParam<std::string> {};
+
+// The backends of the papers: none has a proven bound to lean on, each is held to its model.
+const char* const kPaperBackends[] = {"cpca", "cpca_sh", "haar", "sh_biscale", "srbf_cta"};
 
 TEST_P(LossyPerturbation, AccuracyChecksAcceptTheBackendAndRejectItsRelightOffByOnePercent) {
   const std::string& backend = GetParam();
@@ -47,20 +53,22 @@ TEST_P(LossyPerturbation, AccuracyChecksAcceptTheBackendAndRejectItsRelightOffBy
   for (const char* name : kCases) {
     const CaseData& c = case_data(name);
     SCOPED_TRACE(c.description);
-    {
-      const auto ct = compress(backend, c);
-      for (std::size_t l = 0; l < c.lights.size(); ++l)
-        EXPECT_TRUE(relight_within_declaration(*ct, entry, c, c.lights[l])) << "light " << l;
-      EXPECT_TRUE(frobenius_within_declaration(*ct, entry, c));
+    const std::shared_ptr<const CompressedTransfer> ct = compress(backend, c);
+    if (std::count(std::begin(kPaperBackends), std::end(kPaperBackends), backend)) {
+      EXPECT_NE(stored_model(*ct), nullptr) << backend << " offers no stored model";
+      EXPECT_TRUE(ct->expected_frobenius_error().has_value()) << backend;
     }
+    for (std::size_t l = 0; l < c.lights.size(); ++l)
+      EXPECT_TRUE(relight_within_declaration(*ct, entry, c, c.lights[l])) << "light " << l;
+    EXPECT_TRUE(frobenius_within_declaration(*ct, entry, c));
     for (const Perturbation p : {Perturbation::kScale, Perturbation::kAlternating}) {
       SCOPED_TRACE(std::string("relight perturbed: ") + testing::to_string(p));
-      const auto bad = testing::perturbed(compress(backend, c), p);
+      const auto bad = testing::perturbed(ct, p);
       for (std::size_t l = 0; l < c.lights.size(); ++l) {
         const ::testing::AssertionResult r =
             relight_within_declaration(*bad, entry, c, c.lights[l]);
-        EXPECT_FALSE(r) << "light " << l << ": the relight check accepts a 1 % error: "
-                        << r.message();
+        EXPECT_FALSE(r) << "light " << l
+                        << ": the relight check accepts a 1 % error: " << r.message();
       }
       const ::testing::AssertionResult f = frobenius_within_declaration(*bad, entry, c);
       EXPECT_FALSE(f) << "the Frobenius check accepts a 1 % error: " << f.message();
@@ -73,16 +81,10 @@ INSTANTIATE_TEST_SUITE_P(Registry, LossyPerturbation, ::testing::ValuesIn(lossy_
                            return testing::sanitize_name(p.param);
                          });
 
-// The backends of the papers are among those tested, none with a proven bound to lean on: each
-// is held to its stored model.
 TEST(LossyPerturbationSuite, CoversThePapersLossyBackends) {
   const auto lossy = lossy_backends();
-  for (const char* name : {"cpca", "cpca_sh", "haar", "sh_biscale", "srbf_cta"}) {
-    ASSERT_TRUE(std::count(lossy.begin(), lossy.end(), name)) << name << " is not registered lossy";
-    const auto ct = compress(name, case_data("sphere_over_plane"));
-    EXPECT_NE(stored_model(*ct), nullptr) << name << " offers no stored model";
-    EXPECT_TRUE(ct->expected_frobenius_error().has_value()) << name;
-  }
+  for (const char* name : kPaperBackends)
+    EXPECT_TRUE(std::count(lossy.begin(), lossy.end(), name)) << name << " is not registered lossy";
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ inline const char* to_string(Perturbation p) {
 
 class PerturbedTransfer : public CompressedTransfer {
  public:
-  PerturbedTransfer(std::unique_ptr<CompressedTransfer> inner, Perturbation p)
+  PerturbedTransfer(std::shared_ptr<const CompressedTransfer> inner, Perturbation p)
       : inner_(std::move(inner)), p_(p) {}
 
   const CompressedTransfer& inner() const { return *inner_; }
@@ -54,14 +54,14 @@ class PerturbedTransfer : public CompressedTransfer {
   void save(ArchiveWriter& archive) const override { inner_->save(archive); }
 
  private:
-  std::unique_ptr<CompressedTransfer> inner_;
+  std::shared_ptr<const CompressedTransfer> inner_;
   Perturbation p_;
 };
 
 /// The same, also offering the wrapped transfer's stored model (unperturbed).
 class PerturbedModelTransfer final : public PerturbedTransfer, public StoredModel {
  public:
-  PerturbedModelTransfer(std::unique_ptr<CompressedTransfer> inner, Perturbation p)
+  PerturbedModelTransfer(std::shared_ptr<const CompressedTransfer> inner, Perturbation p)
       : PerturbedTransfer(std::move(inner), p), model_(stored_model(this->inner())) {
     if (model_ == nullptr) throw std::invalid_argument("the wrapped transfer has no stored model");
   }
@@ -74,8 +74,8 @@ class PerturbedModelTransfer final : public PerturbedTransfer, public StoredMode
 };
 
 /// `inner` with its relight perturbed by 1 %, offering a stored model exactly when `inner` does.
-inline std::unique_ptr<CompressedTransfer> perturbed(std::unique_ptr<CompressedTransfer> inner,
-                                                     Perturbation p) {
+inline std::unique_ptr<CompressedTransfer> perturbed(
+    std::shared_ptr<const CompressedTransfer> inner, Perturbation p) {
   if (stored_model(*inner) != nullptr)
     return std::make_unique<PerturbedModelTransfer>(std::move(inner), p);
   return std::make_unique<PerturbedTransfer>(std::move(inner), p);

@@ -19,16 +19,17 @@
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/transfer_error.h"
-#include "prtlab/transfer/exact_relight.h"
 #include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/sphere/hemisphere_projection.h"
 #include "prtlab/sphere/sphere_quadrature.h"
 #include "prtlab/sphere/spherical_harmonics.h"
+#include "prtlab/transfer/exact_relight.h"
 #include "prtlab/transfer/sh_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "prtlab/transfer/visibility.h"
+#include "support/temp_dir.h"
 
 namespace prt::sh_biscale {
 namespace {
@@ -201,14 +202,13 @@ TEST(ShBiscale, AnShTransferOfTooLowAnOrderIsAnError) {
   EXPECT_THROW(compress(r, {{"order", "4"}}), ParameterError);
 }
 
-
 // ---- T L projected to SH on a shadowed scene ----
 
 // A sphere of radius 0.5 at height 0.8 over a 3 x 3 plane (its vertices first), or the plane
-// alone: R = 32, S = 16, s = 2, SH order 3.
-constexpr int kShadowR = 32, kShadowS = 16, kShadowOrder = 3;
+// alone: R = 64, S = 32 (fine bins for the quadrature below), s = 2, SH order 3.
+constexpr int kShadowR = 64, kShadowS = 32, kShadowOrder = 3;
 
-TransferResult shadow_scene(bool with_sphere) {
+TransferResult shadow_scene(bool with_sphere, int resolution = kShadowR, int side = kShadowS) {
   Mesh mesh = make_plane(3.0, 3.0, 4);
   if (with_sphere) {
     Mesh sphere = make_sphere(0.5, 12, 6);
@@ -216,8 +216,8 @@ TransferResult shadow_scene(bool with_sphere) {
     mesh.append(sphere, 1);
   }
   TransferParams p;
-  p.cubemap_resolution = kShadowR;
-  p.local_grid = kShadowS;
+  p.cubemap_resolution = resolution;
+  p.local_grid = side;
   p.supersampling = 2;
   p.sh_order = kShadowOrder;
   p.show_progress = false;
@@ -239,10 +239,10 @@ CellRule cell_rule(int side, int order) {
   std::vector<double> y(n);
   for (int row = 0; row < side; ++row)
     for (int col = 0; col < side; ++col) {
-      const GaussLegendreRule ga = gauss_legendre(6, static_cast<double>(col) / side,
-                                                  static_cast<double>(col + 1) / side);
-      const GaussLegendreRule gb = gauss_legendre(6, static_cast<double>(row) / side,
-                                                  static_cast<double>(row + 1) / side);
+      const GaussLegendreRule ga =
+          gauss_legendre(6, static_cast<double>(col) / side, static_cast<double>(col + 1) / side);
+      const GaussLegendreRule gb =
+          gauss_legendre(6, static_cast<double>(row) / side, static_cast<double>(row + 1) / side);
       for (std::size_t u = 0; u < ga.nodes.size(); ++u)
         for (std::size_t v = 0; v < gb.nodes.size(); ++v) {
           sh_eval(order, glm::normalize(square_to_hemisphere({ga.nodes[u], gb.nodes[v]})), y);
@@ -304,10 +304,13 @@ Matrix relit(const CompressedTransfer& ct, const Cubemap& light) {
 
 std::unique_ptr<CompressedTransfer> compress_shadow(const TransferResult& r,
                                                     const std::string& projection) {
+  const auto resolution =
+      static_cast<int>(std::lround(std::sqrt(static_cast<double>(r.transfer.cols()) / 6)));
+  const auto side = static_cast<int>(std::lround(std::sqrt(r.transfer.local_count())));
   return CompressorRegistry::instance()
       .create(std::string(kName),
               {{"order", std::to_string(kShadowOrder)}, {"projection", projection}})
-      ->compress({r.transfer, &*r.sh, CubemapLayout(kShadowR), HemisphereGrid(kShadowS)},
+      ->compress({r.transfer, &*r.sh, CubemapLayout(resolution), HemisphereGrid(side)},
                  Progress::null());
 }
 
@@ -322,22 +325,25 @@ TEST(ShBiscale, RelightIsTheShProjectionOfTLOnAShadowedScene) {
   ASSERT_EQ(got.rows(), reference.rows());
   ASSERT_EQ(got.cols(), reference.cols());
   // Error budget of the reference: the cell-mean rule errs by about h^2 / 12 |grad f| |grad y|
-  // per cell (h ~ 0.1 rad at S = 16), and each pixel of T counts wholly in the cell of its
-  // centre; both are below 1 % of the coefficients at these resolutions.
+  // per cell (h ~ 0.05 rad at S = 32), and each pixel of T counts wholly in the cell of its
+  // centre (about 12 pixels a cell at R = 64). Halving S from 32 to 16 multiplies the
+  // difference by 2.8 (0.0017 -> 0.0048), as an h^2 error would by 4 with a smaller second
+  // term: it is the reference's, and 0.5 % holds it with a margin of 3.
+  constexpr double kTolerance = 0.005;
   const double err = (got - reference).norm() / reference.norm();
   RecordProperty("relative_error", std::to_string(err));
-  EXPECT_LT(err, 0.01);
+  EXPECT_LT(err, kTolerance);
   // The scene is shadowed, and the check sees it: the plane's vertices under the sphere differ
   // from the same vertices of the plane alone by far more than the tolerance.
   const auto plane_vertices = static_cast<Eigen::Index>(plane.transfer.vertex_count());
   const Matrix open = projected_exact(plane, light, ybar);
   const double shadow = (reference.topRows(plane_vertices) - open).norm() / open.norm();
   RecordProperty("shadow_effect", std::to_string(shadow));
-  EXPECT_GT(shadow, 10 * 0.01);
-  const double per_vertex = (got.topRows(plane_vertices) - reference.topRows(plane_vertices))
-                                .norm() /
-                            reference.topRows(plane_vertices).norm();
-  EXPECT_LT(per_vertex, 0.01) << "on the shadowed plane";
+  EXPECT_GT(shadow, 10 * kTolerance);
+  const double per_vertex =
+      (got.topRows(plane_vertices) - reference.topRows(plane_vertices)).norm() /
+      reference.topRows(plane_vertices).norm();
+  EXPECT_LT(per_vertex, kTolerance) << "on the shadowed plane";
 
   // The least-squares projection is A^-1 of the zero one, A the hemisphere Gram matrix, here by
   // the same cell rule: A c_ls reproduces the reference.
@@ -345,20 +351,28 @@ TEST(ShBiscale, RelightIsTheShProjectionOfTLOnAShadowedScene) {
   const Matrix back = relit(*ls, light) * rule.gram;  // rows are c^T: (A c)^T = c^T A
   const double ls_err = (back - reference).norm() / reference.norm();
   RecordProperty("least_squares_relative_error", std::to_string(ls_err));
-  EXPECT_LT(ls_err, 0.01);
+  EXPECT_LT(ls_err, kTolerance);
 }
 
 TEST(ShBiscale, DeclaredFrobeniusErrorIsTheStoredModelsAndSurvivesSaveLoad) {
-  const TransferResult scene = shadow_scene(true);
+  // Coarser than above: every column relit (N / 3 = 512 relights) and mapped to the bins.
+  const TransferResult scene = shadow_scene(true, 16, 8);
   const auto ct = compress_shadow(scene, "zero");
   ASSERT_TRUE(ct->expected_frobenius_error().has_value());
   const double declared = *ct->expected_frobenius_error();
-  // Every column relit (N / 3 = 2,048 relights) and mapped to the bins.
-  const FrobeniusError f = frobenius_error(*ct, scene.transfer, HemisphereGrid(kShadowS), 2048);
+  const FrobeniusError f = frobenius_error(*ct, scene.transfer, HemisphereGrid(8), 512);
   ASSERT_TRUE(f.exact);
   EXPECT_NEAR(f.relative, declared, 1e-5 * declared);
   EXPECT_GT(declared, 0.05) << "order 3 cannot hold the shadows";
   EXPECT_LT(declared, 1.0);
+  const prt::testing::TempDir dir("sh_biscale");
+  save_compressed(*ct, dir / "shadow.prt");
+  const auto loaded = load_compressed(dir / "shadow.prt");
+  EXPECT_EQ(loaded->expected_frobenius_error(), ct->expected_frobenius_error());
+  const Cubemap light = band_limited_light(16, kShadowOrder);
+  const ModelRadiance a = dynamic_cast<const StoredModel&>(*ct).model_radiance(light),
+                      b = dynamic_cast<const StoredModel&>(*loaded).model_radiance(light);
+  EXPECT_EQ(a.values, b.values);
 }
 
 }  // namespace

@@ -299,13 +299,11 @@ TEST(SrbfCta, StoredErrorsMatchADenseRecomputation) {
   const TransferMatrix t = test_transfer();
   const Eigen::MatrixXd td = dense(t);
   for (const char* precision : {"float32", "float16"}) {
-    const auto ct = compress(
-        t,
-        {{"clusters", "3"},
-         {"rank_light", "6"},
-         {"rank_vertex", "3"},
-         {"precision", precision},
-         {"light", "pixel"}});
+    const auto ct = compress(t, {{"clusters", "3"},
+                                 {"rank_light", "6"},
+                                 {"rank_vertex", "3"},
+                                 {"precision", precision},
+                                 {"light", "pixel"}});
     const SrbfCtaArrays& a = arrays(*ct);
     const double direct = (reconstructed(a) - td).norm() / td.norm();
     EXPECT_NEAR(a.frobenius_error, direct, 1e-5) << precision;
@@ -317,13 +315,11 @@ TEST(SrbfCta, StoredErrorsMatchADenseRecomputation) {
 TEST(SrbfCta, FullRankCtaIsExactlyTheSrbfProjection) {
   const TransferMatrix t = test_transfer();
   // One cluster, every SRBF, vertex rank = the vertex count: CTA keeps the tensor whole.
-  const auto ct = compress(
-      t,
-      {{"clusters", "1"},
-       {"rank_light", "42"},
-       {"rank_vertex", "24"},
-       {"precision", "float32"},
-       {"light", "pixel"}});
+  const auto ct = compress(t, {{"clusters", "1"},
+                               {"rank_light", "42"},
+                               {"rank_vertex", "24"},
+                               {"precision", "float32"},
+                               {"light", "pixel"}});
   const SrbfCtaArrays& a = arrays(*ct);
   EXPECT_NEAR(a.frobenius_error, a.srbf_frobenius_error, 1e-5);
   // The SRBF projection itself, independently: each row by regularised least squares.
