@@ -175,9 +175,9 @@ Eigen::MatrixXd SrbfCtaTransfer::light_operator() const {
   const CubemapLayout layout(cubemap_resolution(a_.pixel_count));
   Eigen::MatrixXd g;
   if (a_.light == LightMode::kUniform) {
-    // project(f) = (A_l + alpha I)^-1 W_l^T f for the radiance f = L / Omega, then E.
-    g = (interpolation_ * light_projector_->solve(light_projector_->pixel_weights().transpose()))
-            .transpose();
+    // L' = E (A_l + alpha I)^-1 W_l^T f for the radiance f = L / Omega, so G = diag(1 / Omega)
+    // W_l S with S = (A_l + alpha I)^-1 E^T: n_t right-hand sides, not N.
+    g = light_projector_->pixel_weights() * light_projector_->solve(interpolation_.transpose());
   } else {
     g = transfer_projector_->pixel_weights();
   }
