@@ -22,6 +22,7 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/numeric/clustered_pca.h"
 
 namespace prt::cpca {
@@ -82,7 +83,7 @@ void blend_rows(const CpcaArrays& a, std::span<const Rgb> q, std::span<Rgb> out)
 void blend_vertex_rows(const CpcaArrays& a, std::span<const Rgb> q,
                        std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
-class CpcaTransfer final : public CompressedTransfer {
+class CpcaTransfer final : public CompressedTransfer, public StoredModel {
  public:
   explicit CpcaTransfer(CpcaArrays arrays) : a_(std::move(arrays)) {}
   static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
@@ -97,6 +98,8 @@ class CpcaTransfer final : public CompressedTransfer {
   /// Lossy without a guaranteed bound: CPCA minimises the squared error of T, not of T L.
   double declared_error_bound() const override { return kNoErrorBound; }
   std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error; }
+  /// Every row rebuilt as its N-vector rep_0 + s sum_i w_i rep_i (double) and dotted with L.
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   bool supports_vertex_subset() const override { return true; }

@@ -90,7 +90,9 @@ class CpcaShCompressor final : public Compressor {
       progress.advance(rows_total * passes / planned - before);
     };
     const ClusteredPca model = clustered_pca(signals, o);
-    auto out = std::make_unique<CpcaShTransfer>(encode(model, signals, std::move(shape)));
+    CpcaShArrays stored = encode(model, signals, std::move(shape));
+    declare_model_error(stored, input);
+    auto out = std::make_unique<CpcaShTransfer>(std::move(stored));
     log_debug("{}: {} clusters, {} weights, signal error {:.4g}", kName, model.clusters.size(),
               model.weight_count(), out->arrays().signal_error);
     progress.finish();
@@ -448,6 +450,8 @@ void CpcaShTransfer::save(ArchiveWriter& archive) const {
   archive.add_meta("method", std::string(to_string(a_.method)));
   archive.add_meta("weights", std::string(to_string(a_.format)));
   archive.add_meta("signal_error", a_.signal_error);
+  archive.add_meta("local_count", a_.local_count);
+  archive.add_meta("frobenius_error", a_.frobenius_error);
   std::vector<std::uint16_t> counts(a_.clusters());
   for (std::size_t c = 0; c < a_.clusters(); ++c)
     counts[c] = static_cast<std::uint16_t>(a_.vectors_of(c));
@@ -474,14 +478,19 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   };
   const int version = r.meta_value<int>("cpca_sh_version");
   if (version != kStateVersion)
-    throw fail(fmt::format("state version {} is not the version {} this build reads", version,
-                           kStateVersion));
+    throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
+                           kStateVersion,
+                           version == 1 ? " (version 1 holds no local bin count and no model "
+                                          "error; compress the transfer again)"
+                                        : ""));
   CpcaShArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.order = r.meta_value<int>("order");
   a.output_order = r.meta_value<int>("output_order");
   const auto clusters = r.meta_value<std::size_t>("clusters");
   a.signal_error = r.meta_value<double>("signal_error");
+  a.local_count = r.meta_value<int>("local_count");
+  a.frobenius_error = r.meta_value<double>("frobenius_error");
   try {
     a.projection = projection_from(r.meta_value<std::string>("projection"));
     a.metric = metric_from(r.meta_value<std::string>("metric"));
@@ -494,8 +503,12 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
       clusters == 0 || clusters > std::max<std::size_t>(a.vertices, 1))
     throw fail(fmt::format("bad shape: order {}, output order {}, {} clusters for {} vertices",
                            a.order, a.output_order, clusters, a.vertices));
-  if (!(std::isfinite(a.signal_error) && a.signal_error >= 0))
-    throw fail("the signal error is not a finite non-negative number");
+  if (!(std::isfinite(a.signal_error) && a.signal_error >= 0 && std::isfinite(a.frobenius_error) &&
+        a.frobenius_error >= 0))
+    throw fail("the signal or the model's Frobenius error is not a finite non-negative number");
+  const int side = static_cast<int>(std::lround(std::sqrt(std::max(a.local_count, 0))));
+  if (a.local_count < 1 || side * side != a.local_count)
+    throw fail(fmt::format("local_count {} is no square grid S^2 >= 1", a.local_count));
   constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
   if (a.vertices > kU32 / static_cast<std::uint64_t>(a.rows()))
     throw fail(fmt::format("{} vertices x {} output rows do not fit the relight's u32 index",
@@ -676,7 +689,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<CpcaShCompressor>(std::move(c));
   };
   e.load = &CpcaShTransfer::load;
-  e.version = 1;
+  e.version = 2;
   return e;
 }
 

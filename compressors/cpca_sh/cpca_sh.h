@@ -25,13 +25,14 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/numeric/clustered_pca.h"
 
 namespace prt::cpca_sh {
 
 inline constexpr std::string_view kName = "cpca_sh";
 /// Version of this backend's archive sections and metadata (bumped when they change).
-inline constexpr int kStateVersion = 1;
+inline constexpr int kStateVersion = 2;
 /// The SH order of the transfer the entry asks prepare_scene() for (BackendInputs are static):
 /// the `order` parameter takes the leading order^2 x order^2 block of it, which is exactly the
 /// transfer of the lower order (both SH index sets are prefixes).
@@ -74,6 +75,11 @@ struct CpcaShArrays {
   /// ||X~ - X|| / ||X|| over all vertices' signals (the projected SH matrices, not T) in the
   /// metric's norm, of the stored model, computed in double while compressing.
   double signal_error = 0;
+  /// M: the local bins the output is evaluated at (to_pixel_basis), for the stored model.
+  int local_count = 0;
+  /// ||T~ - T||_F / ||T||_F of the stored model read as the pixel-basis transfer
+  /// T~_p = B X~_p Y (sh_matrix_model.h), computed in double while compressing.
+  double frobenius_error = 0;
 
   int n() const { return order * order; }
   int rows() const { return output_order * output_order; }
@@ -105,7 +111,13 @@ void blend_vertices(const CpcaShArrays& a, std::span<const Rgb> q, std::span<Rgb
 void blend_vertex_subset(const CpcaShArrays& a, std::span<const Rgb> q,
                          std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
-class CpcaShTransfer final : public CompressedTransfer {
+/// X~_p = X_0 + s sum_i w_i X_i of vertex p as stored (s: the s8 scale, else 1), in double, and
+/// with `magnitude` |X_0| + |s| sum_i |w_i| |X_i| instead (what bounds the relight's rounding).
+void vertex_matrix(const CpcaShArrays& a, std::size_t p, bool magnitude, std::span<double> x);
+/// Sets a.local_count and a.frobenius_error (the stored model against T) from the input.
+void declare_model_error(CpcaShArrays& a, const TransferInput& input);
+
+class CpcaShTransfer final : public CompressedTransfer, public StoredModel {
  public:
   explicit CpcaShTransfer(CpcaShArrays arrays) : a_(std::move(arrays)) {}
   static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
@@ -122,8 +134,11 @@ class CpcaShTransfer final : public CompressedTransfer {
   /// No guarantee for T L: the fit minimises the squared error of the SH matrices, and the SH
   /// truncation of light and transferred radiance is not bounded.
   double declared_error_bound() const override { return kNoErrorBound; }
-  /// None: the model approximates the SH matrices, not the pixel-basis T.
-  std::optional<double> expected_frobenius_error() const override { return std::nullopt; }
+  /// Of the stored model against T at the bins (not the signal error the fit minimises): the SH
+  /// truncation of light and output and the CPCA of the matrices together.
+  std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error; }
+  /// B X~_p (Y L) in double per vertex, X~_p rebuilt from the stored factors.
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   RadianceBasis output_basis() const override { return RadianceBasis::kSphericalHarmonics; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;

@@ -18,6 +18,7 @@
 #include "haar/haar_light.h"
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::haar {
@@ -109,7 +110,7 @@ void relight_haar_wavelet(const HaarArrays& a, std::span<const Rgb> coefficients
 void relight_haar_wavelet_vertices(const HaarArrays& a, std::span<const Rgb> coefficients,
                                    std::span<const std::uint32_t> vertices, std::span<Rgb> out);
 
-class HaarTransfer final : public CompressedTransfer {
+class HaarTransfer final : public CompressedTransfer, public StoredModel {
  public:
   explicit HaarTransfer(HaarArrays arrays) : a_(std::move(arrays)) {}
   /// The state written by save() (InputError naming the file when it is inconsistent).
@@ -125,6 +126,9 @@ class HaarTransfer final : public CompressedTransfer {
   /// None: dropping terms bounds ||T~ - T||_F, not ||T~ L - T L|| / ||T L||.
   double declared_error_bound() const override { return kNoErrorBound; }
   std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error(); }
+  /// Every row's kept terms (decoded, double) inverse-transformed to the pixel basis and dotted
+  /// with L; the magnitude sums |c_j| times |psi_j| |L| over the terms.
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   /// The pixel-basis light: the Haar transform is part of every relight (C++ and OpenCL).
   LightCoeffs project_light(const Cubemap& radiance) const override;
   /// Ng 2003's run-time approximation of the light: its Haar coefficients, only the best

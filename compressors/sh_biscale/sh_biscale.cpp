@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "prtlab/base/error.h"
+#include "prtlab/compress/sh_matrix_model.h"
 #include "prtlab/sphere/hemisphere_projection.h"
 #include "prtlab/sphere/spherical_harmonics.h"
 #include "prtlab/storage/archive.h"
@@ -47,6 +48,13 @@ class ShBiscaleCompressor final : public Compressor {
     a.order = p_.order;
     a.projection = p_.projection;
     a.matrices = vertex_matrices(sh, p_.order, p_.projection);
+    a.local_count = input.grid.cell_count();
+    a.frobenius_error =
+        ShMatrixModel(input.cubemap, input.grid, a.order, a.order)
+            .relative_frobenius_error(input.transfer, [&](std::size_t v, std::span<double> x) {
+              const float* m = a.matrices.data() + v * x.size();
+              std::copy(m, m + x.size(), x.begin());
+            });
     progress.finish();
     return std::make_unique<ShBiscaleTransfer>(std::move(a));
   }
@@ -119,6 +127,21 @@ LightCoeffs ShBiscaleTransfer::project_light(const Cubemap& radiance) const {
   return out;
 }
 
+ModelRadiance ShBiscaleTransfer::model_radiance(const Cubemap& radiance) const {
+  const int side = static_cast<int>(std::lround(std::sqrt(static_cast<double>(a_.local_count))));
+  const ShMatrixModel model(radiance.layout, HemisphereGrid(side), a_.order, a_.order);
+  const auto nn = static_cast<std::size_t>(a_.n()) * static_cast<std::size_t>(a_.n());
+  return model.radiance(
+      radiance, a_.vertices,
+      [&](std::size_t v, std::span<double> x) {
+        std::copy_n(a_.matrices.data() + v * nn, nn, x.begin());
+      },
+      [&](std::size_t v, std::span<double> x) {
+        const float* m = a_.matrices.data() + v * nn;
+        for (std::size_t i = 0; i < nn; ++i) x[i] = std::abs(m[i]);
+      });
+}
+
 void ShBiscaleTransfer::check_light(const LightCoeffs& light) const {
   if (light.basis != light_basis() || light.values.size() != static_cast<std::size_t>(a_.n()))
     throw ParameterError(fmt::format(
@@ -151,6 +174,8 @@ void ShBiscaleTransfer::save(ArchiveWriter& archive) const {
   archive.add_meta("vertices", a_.vertices);
   archive.add_meta("order", a_.order);
   archive.add_meta("projection", std::string(to_string(a_.projection)));
+  archive.add_meta("local_count", a_.local_count);
+  archive.add_meta("frobenius_error", a_.frobenius_error);
   archive.add_section("matrices", a_.matrices);
 }
 
@@ -160,11 +185,21 @@ std::unique_ptr<CompressedTransfer> ShBiscaleTransfer::load(const ArchiveReader&
   };
   const int version = r.meta_value<int>("sh_biscale_version");
   if (version != kStateVersion)
-    throw fail(fmt::format("state version {} is not the version {} this build reads", version,
-                           kStateVersion));
+    throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
+                           kStateVersion,
+                           version == 1 ? " (version 1 holds no local bin count and no model "
+                                          "error; compress the transfer again)"
+                                        : ""));
   ShBiscaleArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.order = r.meta_value<int>("order");
+  a.local_count = r.meta_value<int>("local_count");
+  a.frobenius_error = r.meta_value<double>("frobenius_error");
+  const int side = static_cast<int>(std::lround(std::sqrt(std::max(a.local_count, 0))));
+  if (a.local_count < 1 || side * side != a.local_count)
+    throw fail(fmt::format("local_count {} is no square grid S^2 >= 1", a.local_count));
+  if (!(std::isfinite(a.frobenius_error) && a.frobenius_error >= 0))
+    throw fail("the model's Frobenius error is not a finite non-negative number");
   try {
     a.projection = projection_from(r.meta_value<std::string>("projection"));
   } catch (const ParameterError& e) {
@@ -220,7 +255,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<ShBiscaleCompressor>(c);
   };
   e.load = &ShBiscaleTransfer::load;
-  e.version = 1;
+  e.version = 2;
   e.published = {
       {"bunny",
        {{"order", "5"}},

@@ -22,12 +22,13 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 
 namespace prt::sh_biscale {
 
 inline constexpr std::string_view kName = "sh_biscale";
 /// Version of this backend's archive sections and metadata (bumped when they change).
-inline constexpr int kStateVersion = 1;
+inline constexpr int kStateVersion = 2;
 /// The SH order of the transfer the entry asks prepare_scene() for (BackendInputs are static):
 /// the `order` parameter takes the leading order^2 x order^2 block, which is exactly the
 /// transfer of that order (SH index sets of lower orders are prefixes).
@@ -44,6 +45,11 @@ struct ShBiscaleArrays {
   /// vertices x n x n, vertex after vertex, each row-major: matrices[(p n + i) n + k], i the
   /// local and k the global coefficient.
   std::vector<float> matrices;
+  /// M: the local bins the output is evaluated at (to_pixel_basis), for the stored model.
+  int local_count = 0;
+  /// ||T~ - T||_F / ||T||_F of the stored matrices read as the pixel-basis transfer
+  /// T~_p = B M_p Y (sh_matrix_model.h), computed in double while compressing.
+  double frobenius_error = 0;
   int n() const { return order * order; }
 };
 
@@ -56,7 +62,7 @@ std::vector<float> vertex_matrices(const ShTransfer& sh, int order, Projection p
 void relight_rows(const ShBiscaleArrays& a, std::span<const Rgb> light,
                   std::span<const std::uint32_t> vertices, bool all, std::span<Rgb> out);
 
-class ShBiscaleTransfer final : public CompressedTransfer {
+class ShBiscaleTransfer final : public CompressedTransfer, public StoredModel {
  public:
   explicit ShBiscaleTransfer(ShBiscaleArrays arrays) : a_(std::move(arrays)) {}
   static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
@@ -72,7 +78,10 @@ class ShBiscaleTransfer final : public CompressedTransfer {
   /// No guarantee for T L: the SH truncation of the light and of the transferred radiance is
   /// not bounded.
   double declared_error_bound() const override { return kNoErrorBound; }
-  std::optional<double> expected_frobenius_error() const override { return std::nullopt; }
+  /// Of the stored f32 matrices against T, at the bins: the SH truncation of light and output.
+  std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error; }
+  /// B M_p (Y L) in double per vertex (sh_matrix_model.h).
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   RadianceBasis output_basis() const override { return RadianceBasis::kSphericalHarmonics; }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;

@@ -176,12 +176,11 @@ SrbfCtaArrays encode(const CtaModel& m, const Params& p, const TransferMatrix& t
   return a;
 }
 
-/// ||T~ - T||_F / ||T||_F of the stored (decoded) model in the pixel basis:
-/// ||T~_x||^2 = tr(K_x G_c K_x^T H) with G_c = U_c^T P U_c, H = U^T U, K_x = refold(V_c^T W_x),
-/// and <T~, T> summed over T's stored entries.
-double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const SrbfProjector& p,
-                    const CubemapLayout& layout) {
-  const Eigen::MatrixXd g = pixel_values(p, layout);
+/// ||T~ - T||_F / ||T||_F of the stored (decoded) model in the pixel basis, T~'s row (x, m)
+/// being g (U K_x U_c^T)[m]^T for the light step's operator g (N x n_t):
+/// ||T~_x||^2 = tr(K_x G_c K_x^T H) with G_c = U_c^T P U_c, P = g^T g, H = U^T U,
+/// K_x = refold(V_c^T W_x), and <T~, T> summed over T's stored entries.
+double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen::MatrixXd& g) {
   const Eigen::MatrixXd gt = g.transpose();
   const Eigen::MatrixXd pm = g.transpose() * g;
   const auto r1 = a.rank_view, r2 = a.rank_light, r3 = a.rank_vertex, nt = a.srbf_count,
@@ -275,18 +274,19 @@ class SrbfCtaCompressor final : public Compressor {
     SrbfCtaArrays a = encode(model, p_, t, bandwidth);
     a.srbf_frobenius_error = proj.frobenius_error;
     const auto t0 = Clock::now();
-    a.frobenius_error = stored_error(a, t, *projector, input.cubemap);
+    auto out = std::make_unique<SrbfCtaTransfer>(std::move(a), projector);
+    out->declare_model_error(t);
     log_info(
         "{}: {} clusters, ranks ({}, {}, {}); projection {:.1f} s, CTA initialisation {:.1f} s, "
         "clustering {:.1f} s ({} iterations), approximation {:.1f} s ({} iterations), error "
         "{:.1f} s; relative Frobenius error: SRBF {:.4f}, SRBF + CTA {:.4f}",
-        kName, model.clusters.size(), a.rank_view, a.rank_light, a.rank_vertex, proj.seconds,
-        model.times.initialisation, model.times.clustering, model.clustering_iterations,
-        model.times.approximation, model.approximation_iterations,
-        std::chrono::duration<double>(Clock::now() - t0).count(), a.srbf_frobenius_error,
-        a.frobenius_error);
+        kName, model.clusters.size(), out->arrays().rank_view, out->arrays().rank_light,
+        out->arrays().rank_vertex, proj.seconds, model.times.initialisation, model.times.clustering,
+        model.clustering_iterations, model.times.approximation, model.approximation_iterations,
+        std::chrono::duration<double>(Clock::now() - t0).count(),
+        out->arrays().srbf_frobenius_error, out->arrays().frobenius_error);
     progress.finish();
-    return std::make_unique<SrbfCtaTransfer>(std::move(a), projector);
+    return out;
   }
 
  private:
@@ -294,6 +294,10 @@ class SrbfCtaCompressor final : public Compressor {
 };
 
 }  // namespace
+
+void SrbfCtaTransfer::declare_model_error(const TransferMatrix& t) {
+  a_.frobenius_error = stored_error(a_, t, light_operator());
+}
 
 SrbfBasis transfer_basis(int srbf_count, double bandwidth) {
   SrbfBasis b;
@@ -444,7 +448,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;
-  e.version = 1;
+  e.version = 2;
   e.published = {
       {"bunny",
        {{"srbfs", "642"},

@@ -21,12 +21,13 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/sphere/srbf_projection.h"
 
 namespace prt::srbf_cta {
 
 inline constexpr std::string_view kName = "srbf_cta";
-inline constexpr int kStateVersion = 1;
+inline constexpr int kStateVersion = 2;
 
 enum class Precision { kFloat32, kFloat16 };
 /// How project_light computes L': the light fitted with uniform SRBFs (eq. 13's interpolation
@@ -55,7 +56,8 @@ struct SrbfCtaArrays {
   std::vector<float> duals;        ///< clusters x R3 x (R1 R2), rows beyond a cluster's rank 0
   std::vector<std::uint32_t> ids;  ///< per vertex
   std::vector<float> weights;      ///< vertices x R3
-  /// ||T~ - T||_F / ||T||_F of the stored model; of the SRBF projection alone (before CTA).
+  /// ||T~ - T||_F / ||T||_F of the stored model with its light step (light_operator()); of the
+  /// SRBF projection alone (before CTA, with the pixel quadrature).
   double frobenius_error = 0, srbf_frobenius_error = 0;
 
   std::size_t clusters() const {
@@ -76,7 +78,7 @@ std::vector<Rgb> cluster_matrices(const SrbfCtaArrays& a, std::span<const Rgb> l
 void blend_vertices(const SrbfCtaArrays& a, std::span<const Rgb> q,
                     std::span<const std::uint32_t> vertices, bool all, std::span<Rgb> out);
 
-class SrbfCtaTransfer final : public CompressedTransfer {
+class SrbfCtaTransfer final : public CompressedTransfer, public StoredModel {
  public:
   /// `projector`: the transfer SRBFs' projector when the caller has it (the compressor), else
   /// built here.
@@ -93,7 +95,24 @@ class SrbfCtaTransfer final : public CompressedTransfer {
   /// per cluster 2 n_t R2 + 2 R3 R1 R2 + 2 M R1 R3, per vertex 2 M R3.
   double flops_per_relight() const override;
   double declared_error_bound() const override { return kNoErrorBound; }
-  std::optional<double> expected_frobenius_error() const override { return a_.frobenius_error; }
+  /// The stored model's error with the light step it relights through (uniform or pixel); none
+  /// for scattered light, whose fit depends on the light non-linearly (no operator T~ exists).
+  std::optional<double> expected_frobenius_error() const override {
+    return a_.light == LightMode::kScattered ? std::nullopt
+                                             : std::optional<double>(a_.frobenius_error);
+  }
+  /// G (N x n_t): the light step as a pixel-basis operator, L' = G^T L. Pixel: b's weights over
+  /// the solid angles; uniform: diag(1 / Omega) W_l (A_l + alpha I)^-1 E^T, the fit to the light
+  /// SRBFs and eq. 13 in one matrix; scattered (not linear): the pixel quadrature's.
+  Eigen::MatrixXd light_operator() const;
+  /// Sets the declared error: the stored model through light_operator() against `t` (the
+  /// compressor calls it once, with the T it compressed).
+  void declare_model_error(const TransferMatrix& t);
+  /// Per vertex U K_x (U_c^T L'), K_x = refold(W_x V_c) rebuilt in double, L' of
+  /// light_products().
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
+  /// L' (n_t x 3, double): what project_light() rounds to float.
+  Eigen::MatrixXd light_products(const Cubemap& radiance) const;
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   bool supports_vertex_subset() const override { return true; }

@@ -130,7 +130,7 @@ double SrbfCtaTransfer::flops_per_relight() const {
   return light + c * (2 * nt * r2 + 2 * r3 * r1 * r2 + 2 * m * r1 * r3) + v * 2 * m * r3;
 }
 
-LightCoeffs SrbfCtaTransfer::project_light(const Cubemap& radiance) const {
+Eigen::MatrixXd SrbfCtaTransfer::light_products(const Cubemap& radiance) const {
   if (radiance.layout.pixel_count() != a_.pixel_count)
     throw ParameterError(fmt::format("{}: a light of {} pixels for a transfer of {}", kName,
                                      radiance.layout.pixel_count(), a_.pixel_count));
@@ -138,20 +138,16 @@ LightCoeffs SrbfCtaTransfer::project_light(const Cubemap& radiance) const {
   Eigen::MatrixXd rad(n, 3);
   for (Eigen::Index k = 0; k < n; ++k)
     for (int ch = 0; ch < 3; ++ch) rad(k, ch) = radiance.radiance[static_cast<std::size_t>(k)][ch];
-  LightCoeffs out;
-  out.basis = light_basis();
   switch (a_.light) {
     case LightMode::kPixel:
-      out.values = to_rgb(transfer_projector_->pixel_weights().transpose() * rad);
-      break;
+      return transfer_projector_->pixel_weights().transpose() * rad;
     case LightMode::kUniform: {
       Eigen::MatrixXd coeffs(static_cast<Eigen::Index>(light_projector_->basis().size()), 3);
       for (int ch = 0; ch < 3; ++ch) {
         const Eigen::VectorXd f = rad.col(ch);
         coeffs.col(ch) = light_projector_->project(std::span<const double>(f.data(), f.size()));
       }
-      out.values = to_rgb(interpolation_ * coeffs);
-      break;
+      return interpolation_ * coeffs;
     }
     case LightMode::kScattered: {
       ScatteredFitOptions o;
@@ -165,11 +161,28 @@ LightCoeffs SrbfCtaTransfer::project_light(const Cubemap& radiance) const {
       for (std::size_t j = 0; j < fit.count(); ++j)
         for (int ch = 0; ch < 3; ++ch)
           coeffs(static_cast<Eigen::Index>(j), ch) = fit.coefficients[j][ch];
-      out.values = to_rgb(srbf_inner_products(basis_, lb) * coeffs);
-      break;
+      return srbf_inner_products(basis_, lb) * coeffs;
     }
   }
-  return out;
+  return Eigen::MatrixXd::Zero(a_.srbf_count, 3);
+}
+
+LightCoeffs SrbfCtaTransfer::project_light(const Cubemap& radiance) const {
+  return LightCoeffs{light_basis(), to_rgb(light_products(radiance))};
+}
+
+Eigen::MatrixXd SrbfCtaTransfer::light_operator() const {
+  const CubemapLayout layout(cubemap_resolution(a_.pixel_count));
+  Eigen::MatrixXd g;
+  if (a_.light == LightMode::kUniform) {
+    // L' = E (A_l + alpha I)^-1 W_l^T f for the radiance f = L / Omega, so G = diag(1 / Omega)
+    // W_l S with S = (A_l + alpha I)^-1 E^T: n_t right-hand sides, not N.
+    g = light_projector_->pixel_weights() * light_projector_->solve(interpolation_.transpose());
+  } else {
+    g = transfer_projector_->pixel_weights();
+  }
+  for (Eigen::Index k = 0; k < g.rows(); ++k) g.row(k) /= layout.solid_angle(static_cast<int>(k));
+  return g;
 }
 
 void SrbfCtaTransfer::check_light(const LightCoeffs& light) const {
@@ -257,8 +270,12 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   };
   const int version = r.meta_value<int>("srbf_cta_version");
   if (version != kStateVersion)
-    throw fail(fmt::format("state version {} is not the version {} this build reads", version,
-                           kStateVersion));
+    throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
+                           kStateVersion,
+                           version == 1 ? " (version 1 declares the error of the pixel-quadrature "
+                                          "light step whatever the light mode; compress the "
+                                          "transfer again)"
+                                        : ""));
   SrbfCtaArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.local_count = r.meta_value<int>("local_count");

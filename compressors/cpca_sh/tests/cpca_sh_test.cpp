@@ -333,7 +333,8 @@ TEST(CpcaSh, StorageAndFlopsFollowTheLayout) {
   // The paper's count: per cluster (n' + 1) rows n products, per vertex n' rows blend.
   EXPECT_EQ(ct->flops_per_relight(),
             6.0 * 4 * 16 * 25 * 2 + static_cast<double>(vertices) * 2 * 3 * 16);
-  EXPECT_FALSE(ct->expected_frobenius_error().has_value());
+  ASSERT_TRUE(ct->expected_frobenius_error().has_value());
+  EXPECT_EQ(*ct->expected_frobenius_error(), a.frobenius_error);
   EXPECT_EQ(ct->declared_error_bound(), kNoErrorBound);
 }
 

@@ -15,6 +15,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/transfer_error.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/random_transfer.h"
@@ -299,9 +300,11 @@ TEST(SrbfCta, StoredErrorsMatchADenseRecomputation) {
   const TransferMatrix t = test_transfer();
   const Eigen::MatrixXd td = dense(t);
   for (const char* precision : {"float32", "float16"}) {
-    const auto ct = compress(
-        t,
-        {{"clusters", "3"}, {"rank_light", "6"}, {"rank_vertex", "3"}, {"precision", precision}});
+    const auto ct = compress(t, {{"clusters", "3"},
+                                 {"rank_light", "6"},
+                                 {"rank_vertex", "3"},
+                                 {"precision", precision},
+                                 {"light", "pixel"}});
     const SrbfCtaArrays& a = arrays(*ct);
     const double direct = (reconstructed(a) - td).norm() / td.norm();
     EXPECT_NEAR(a.frobenius_error, direct, 1e-5) << precision;
@@ -313,9 +316,11 @@ TEST(SrbfCta, StoredErrorsMatchADenseRecomputation) {
 TEST(SrbfCta, FullRankCtaIsExactlyTheSrbfProjection) {
   const TransferMatrix t = test_transfer();
   // One cluster, every SRBF, vertex rank = the vertex count: CTA keeps the tensor whole.
-  const auto ct = compress(
-      t,
-      {{"clusters", "1"}, {"rank_light", "42"}, {"rank_vertex", "24"}, {"precision", "float32"}});
+  const auto ct = compress(t, {{"clusters", "1"},
+                               {"rank_light", "42"},
+                               {"rank_vertex", "24"},
+                               {"precision", "float32"},
+                               {"light", "pixel"}});
   const SrbfCtaArrays& a = arrays(*ct);
   EXPECT_NEAR(a.frobenius_error, a.srbf_frobenius_error, 1e-5);
   // The SRBF projection itself, independently: each row by regularised least squares.
@@ -335,6 +340,26 @@ TEST(SrbfCta, FullRankCtaIsExactlyTheSrbfProjection) {
     se += (g * c - td.row(static_cast<Eigen::Index>(r)).transpose()).squaredNorm();
   }
   EXPECT_NEAR(a.srbf_frobenius_error, std::sqrt(se) / td.norm(), 1e-6);
+}
+
+// The declared error is the one the relight's own light step implies: with uniform light the
+// stored model through the light SRBFs' fit and eq. 13, measured by relighting every column;
+// scattered light depends on the light non-linearly and declares none.
+TEST(SrbfCta, DeclaredErrorIsTheRelightsOperatorsForEveryLinearLightMode) {
+  const TransferMatrix t = test_transfer();
+  const Params base{{"clusters", "3"}, {"rank_light", "8"}, {"rank_vertex", "3"}};
+  for (const char* light : {"uniform", "pixel"}) {
+    Params p = base;
+    p["light"] = light;
+    const auto ct = compress(t, p);
+    ASSERT_TRUE(ct->expected_frobenius_error().has_value()) << light;
+    const FrobeniusError f = frobenius_error(*ct, t, HemisphereGrid(2));
+    ASSERT_TRUE(f.exact);
+    EXPECT_NEAR(f.relative, *ct->expected_frobenius_error(), 1e-5) << light;
+  }
+  Params scattered = base;
+  scattered["light"] = "scattered";
+  EXPECT_FALSE(compress(t, scattered)->expected_frobenius_error().has_value());
 }
 
 TEST(SrbfCta, PixelLightRelightIsTheDenseProductAndUniformLightAgrees) {

@@ -102,6 +102,37 @@ void ShProbeTransfer::relight(const LightCoeffs& light, LocalRadiance& out) cons
     }
 }
 
+ModelRadiance ShProbeTransfer::model_radiance(const Cubemap& radiance) const {
+  const LightCoeffs light = project_light(radiance);
+  std::vector<Rgb> absolute(light.values.size());
+  for (std::size_t k = 0; k < absolute.size(); ++k) absolute[k] = glm::abs(light.values[k]);
+  const std::vector<Vec3d> tl = relight_exact_double(t_, light.values),
+                           tl_abs = relight_exact_double(t_, absolute);
+  const int m = t_.local_count(), n = sh_count(order_);
+  const std::vector<double> b = sh_cell_integrals(HemisphereGrid(grid_side(m)), order_);
+  ModelRadiance out;
+  out.values.assign(t_.rows(), Vec3d(0.0));
+  out.magnitude.assign(t_.rows(), Vec3d(0.0));
+  std::vector<Vec3d> c(static_cast<std::size_t>(n)), ca(c.size());
+  for (std::size_t v = 0; v < t_.vertex_count(); ++v) {
+    for (int i = 0; i < n; ++i) {
+      c[i] = ca[i] = Vec3d(0.0);
+      for (int j = 0; j < m; ++j) {
+        const double pij = p_[static_cast<std::size_t>(i) * m + j];
+        c[i] += pij * tl[v * m + j];
+        ca[i] += std::abs(pij) * tl_abs[v * m + j];
+      }
+    }
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double bji = b[static_cast<std::size_t>(j) * n + i];
+        out.values[v * m + j] += bji * c[i];
+        out.magnitude[v * m + j] += std::abs(bji) * ca[i];
+      }
+  }
+  return out;
+}
+
 std::unique_ptr<DeviceRelighter> ShProbeTransfer::upload(ClContext& context,
                                                          const ParamSet&) const {
   return upload_probe(context, *this);

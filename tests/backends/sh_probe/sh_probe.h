@@ -11,6 +11,7 @@
 
 #include "prtlab/compress/compressor.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/stored_model.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt::sh_probe {
@@ -18,7 +19,7 @@ namespace prt::sh_probe {
 inline constexpr std::string_view kName = "sh_probe";
 inline constexpr int kStateVersion = 1;
 
-class ShProbeTransfer final : public CompressedTransfer {
+class ShProbeTransfer final : public CompressedTransfer, public StoredModel {
  public:
   ShProbeTransfer(TransferMatrix t, int order);
   static std::unique_ptr<CompressedTransfer> load(const ArchiveReader& archive);
@@ -34,6 +35,8 @@ class ShProbeTransfer final : public CompressedTransfer {
   double declared_error_bound() const override { return expected_ == 0 ? 0.0 : 1.0; }
   std::optional<double> expected_frobenius_error() const override { return expected_; }
   RadianceBasis output_basis() const override { return RadianceBasis::kSphericalHarmonics; }
+  /// B P (T L) in double at the bins.
+  ModelRadiance model_radiance(const Cubemap& radiance) const override;
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,
