@@ -414,14 +414,17 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
         const auto& entry = registry.get(c.backend);
         for (const std::string* key : {&c.x, &c.series, &c.panel}) {
           if (key->empty()) continue;
-          const bool known = std::any_of(entry.params.begin(), entry.params.end(),
-                                         [&](const ParamSpec& p) { return p.key == *key; }) ||
-                             (key == &c.x && std::ranges::count(point_record_columns(), *key) > 0);
+          const bool known =
+              std::any_of(entry.params.begin(), entry.params.end(),
+                          [&](const ParamSpec& p) { return p.key == *key; }) ||
+              (key == &c.x && (std::ranges::count(point_record_columns(), *key) > 0 ||
+                               key->starts_with("metrics.")));
           if (!known)
             throw InputError(
                 file,
-                line_of(e) + fmt::format("curve: '{}' is not a parameter of {}{}", *key, c.backend,
-                                         key == &c.x ? " nor a points.csv column" : ""));
+                line_of(e) +
+                    fmt::format("curve: '{}' is not a parameter of {}{}", *key, c.backend,
+                                key == &c.x ? " nor a points.csv column nor metrics.<name>" : ""));
         }
       }
       s.curves.push_back(std::move(c));

@@ -42,8 +42,9 @@ struct TargetSpec {
 };
 
 /// A plot of a sweep (docs/experiments.md "Curves"): one backend's points, `y` (a points.csv
-/// column) against the parameter `x`, one line per value of the parameter `series`, one panel
-/// per value of `panel` (optional). The CPCA paper's Fig. 2/3 are such curves.
+/// column, or metrics.<name>: a backend metric) against the parameter `x`, one line per value of
+/// the parameter `series`, one panel per value of `panel` (optional). The CPCA paper's Fig. 2/3 are
+/// such curves.
 struct CurveSpec {
   std::string backend;
   std::string x;

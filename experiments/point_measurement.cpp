@@ -24,7 +24,7 @@ namespace {
 using json = nlohmann::json;
 
 // Bump when a point's record changes meaning or layout: cached points are then recomputed.
-constexpr std::uint32_t kPointVersion = 6;
+constexpr std::uint32_t kPointVersion = 7;
 constexpr const char* kPointKind = "experiment-point";
 
 json null_if_nan(double v) {
@@ -104,7 +104,8 @@ const std::vector<std::string>& point_record_columns() {
                                                    "nnz",
                                                    "pareto_time",
                                                    "pareto_storage",
-                                                   "point_key"};
+                                                   "point_key",
+                                                   "backend_metrics"};
   return columns;
 }
 
@@ -196,6 +197,17 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
       r["frobenius_se_declared"] = nullptr;
     }
     r["max_vertex_rel"] = ev.max_vertex_rel;
+    // What the backend measured of itself (its own signal's error, ...): null when it declares
+    // nothing, so that the column stays empty for most backends.
+    json metrics = json::object(), meanings = json::object();
+    for (const BackendMetric& m : cr.compressed->backend_metrics()) {
+      metrics[m.name] = null_if_nan(m.value);
+      meanings[m.name] = m.meaning;
+    }
+    if (!metrics.empty()) {
+      r["backend_metrics"] = metrics;
+      r["backend_metric_meanings"] = meanings;
+    }
 
     json errors = json::array();
     std::map<std::string, double> relight_by_env;  // median frame relight per environment
