@@ -174,6 +174,7 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
 
     EvaluationOptions eo;
     eo.repeats = spec.timing ? spec.repeats : 1;
+    eo.frobenius_relights = spec.frobenius_relights;
     const BackendEvaluation ev = evaluate_backend(*cr.compressed, t, b.lights, o.device, eo);
     r["device"] = ev.device;
     if (spec.timing) {
@@ -183,12 +184,14 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     r["opencl_vs_cpp_rel_l2"] = ev.opencl_vs_cpp ? json(*ev.opencl_vs_cpp) : json(nullptr);
     r["lstar_rel_l2_mean"] = ev.mean_rel_l2;
     r["lstar_rel_l2_max"] = ev.max_rel_l2;
-    r["frobenius_rel"] = ev.frobenius.relative;
-    r["frobenius_stderr"] = ev.frobenius.standard_error;
-    r["frobenius_exact"] = ev.frobenius.exact;
-    // The squared error ||T~ - T||_F^2 the CPCA and SRBF papers report as SE.
-    r["frobenius_se"] =
-        ev.frobenius.relative * ev.frobenius.relative * b.info.at("frobenius_sq").get<double>();
+    if (ev.frobenius.relights > 0) {  // else skipped: frobenius_relights = 0
+      r["frobenius_rel"] = ev.frobenius.relative;
+      r["frobenius_stderr"] = ev.frobenius.standard_error;
+      r["frobenius_exact"] = ev.frobenius.exact;
+      // The squared error ||T~ - T||_F^2 the CPCA and SRBF papers report as SE.
+      r["frobenius_se"] =
+          ev.frobenius.relative * ev.frobenius.relative * b.info.at("frobenius_sq").get<double>();
+    }
     // The backend's own ||T~ - T||_F^2 when it computes one while compressing (exact, where the
     // measured value above is an estimate from a few relights): the curves plot it.
     if (const auto expected = cr.compressed->expected_frobenius_error()) {

@@ -442,6 +442,7 @@ backends = ["coo", "uncompressed"]
 environments = ["courtyard"]
 images = false
 timing = false
+frobenius_relights = 0
 [grid.coo]
 keep = [0.25, 0.5]
 [[curves]]
@@ -462,6 +463,10 @@ y = "frobenius_se_declared"
       EXPECT_TRUE(p.at("backend_metrics").is_null());
       continue;
     }
+    // frobenius_relights = 0: the harness's Frobenius error is not measured, the declared one is.
+    EXPECT_TRUE(p.at("frobenius_rel").is_null());
+    EXPECT_TRUE(p.at("frobenius_se").is_null());
+    EXPECT_TRUE(p.at("frobenius_se_declared").is_number());
     const double entries = p.at("backend_metrics").at("entries_kept").get<double>();
     EXPECT_EQ(entries * 12, p.at("storage_bytes").get<double>());
     EXPECT_EQ(p.at("backend_metric_meanings").at("entries_kept"), "triplets of T kept");
