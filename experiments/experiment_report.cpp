@@ -58,6 +58,18 @@ std::string params_cell(const json& p) {
   return out.empty() ? "defaults" : "`" + out + "`";
 }
 
+// A point's value of `key`: a points.csv column, or "metrics.<name>", the backend metric <name>
+// (CompressedTransfer::backend_metrics()); null where the point has none.
+json point_value(const json& p, const std::string& key) {
+  constexpr std::string_view kMetric = "metrics.";
+  if (key.starts_with(kMetric)) {
+    const json m = p.value("backend_metrics", json(nullptr));
+    const std::string name = key.substr(kMetric.size());
+    return m.is_object() && m.contains(name) ? m.at(name) : json(nullptr);
+  }
+  return p.value(key, json(nullptr));
+}
+
 std::vector<const json*> points_of(const json& result, const std::string& scene) {
   std::vector<const json*> out;
   for (const auto& p : result.at("points"))
@@ -339,6 +351,50 @@ void scaling_section(std::string& md, const json& result, const fs::path& folder
     md += "![storage and frame rate against the swept setting](scaling.png)\n\n";
 }
 
+// What the backends measured of themselves (CompressedTransfer::backend_metrics()): per scene
+// and backend that declares any, a row per point with every metric, and what each one means.
+void backend_metrics_section(std::string& md, const json& result) {
+  std::string body;
+  for (const auto& scene : result.at("scenes")) {
+    const std::string name = scene.at("scene");
+    std::map<std::string, std::vector<const json*>> by_backend;
+    std::map<std::string, std::map<std::string, std::string>> meanings;
+    for (const json* p : points_of(result, name)) {
+      const json m = p->value("backend_metrics", json(nullptr));
+      if (!m.is_object() || m.empty()) continue;
+      const std::string backend = p->at("backend");
+      by_backend[backend].push_back(p);
+      const json mean = p->value("backend_metric_meanings", json::object());
+      for (const auto& [k, _] : m.items())
+        meanings[backend][k] = mean.is_object() ? mean.value(k, std::string()) : std::string();
+    }
+    for (const auto& [backend, points] : by_backend) {
+      body += fmt::format("{}, `{}`:\n\n| parameters |", name, backend);
+      std::string rule = "|---|";
+      for (const auto& [k, _] : meanings[backend]) {
+        body += fmt::format(" {} |", k);
+        rule += "---:|";
+      }
+      body += "\n" + rule + "\n";
+      for (const json* p : points) {
+        body += fmt::format("| {} |", params_cell(p->at("params")));
+        for (const auto& [k, _] : meanings[backend])
+          body += fmt::format(" {} |", fmt_num(point_value(*p, "metrics." + k), "{:.5g}"));
+        body += "\n";
+      }
+      body += "\n";
+      for (const auto& [k, meaning] : meanings[backend])
+        body += fmt::format("- `{}`: {}\n", k, meaning.empty() ? "(no description)" : meaning);
+      body += "\n";
+    }
+  }
+  if (body.empty()) return;
+  md +=
+      "## Backend metrics\n\nWhat each backend measured of itself while compressing "
+      "(`backend_metrics` in result.json and points.csv; curves name them `metrics.<name>`).\n\n";
+  md += body;
+}
+
 // The experiment's [[curves]] (docs/experiments.md "Curves"): per curve and scene a table of
 // the curve's points and the plot scripts/plot_experiment.py drew.
 void curves_section(std::string& md, const json& result, const fs::path& folder) {
@@ -362,12 +418,13 @@ void curves_section(std::string& md, const json& result, const fs::path& folder)
         const auto par = [&](const std::string& k) {
           if (k.empty()) return std::string("-");
           if (cp.contains(k)) return cp.value(k, std::string("?"));
-          return p.contains(k) ? fmt_num(p.at(k), "{:.4g}") : std::string("?");
+          const json v = point_value(p, k);
+          return v.is_null() ? std::string("?") : fmt_num(v, "{:.4g}");
         };
-        rows += fmt::format("| {} | {} | {} | {} | {:.3f} | {} |\n", par(panel), par(series),
-                            par(x), fmt_num(p.value(y, json(nullptr)), "{:.4g}"),
-                            num(p.at("storage_bytes")) / 1e6,
-                            fmt_num(p.value("compress_seconds", json(nullptr)), "{:.2f}"));
+        rows +=
+            fmt::format("| {} | {} | {} | {} | {:.3f} | {} |\n", par(panel), par(series), par(x),
+                        fmt_num(point_value(p, y), "{:.4g}"), num(p.at("storage_bytes")) / 1e6,
+                        fmt_num(p.value("compress_seconds", json(nullptr)), "{:.2f}"));
       }
       if (rows.empty()) continue;
       md += fmt::format(
@@ -441,6 +498,7 @@ std::string render_experiment_markdown(const json& result, const fs::path& folde
       sweep_section(md, result, scene, folder);
   }
   scaling_section(md, result, folder);
+  backend_metrics_section(md, result);
   curves_section(md, result, folder);
 
   if (!result.at("paper").empty()) {

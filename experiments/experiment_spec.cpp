@@ -22,11 +22,15 @@ namespace fs = std::filesystem;
 const std::vector<std::string> kBlenderWorlds = {"city",  "courtyard", "forest",  "interior",
                                                  "night", "studio",    "sunrise", "sunset"};
 
-const std::set<std::string> kTopKeys = {
-    "name",    "title",        "kind",        "scenes",       "scene_grid", "backends",  "exclude",
-    "params",  "grid",         "knob_points", "environments", "views",      "image",     "btf",
-    "repeats", "timing",       "images",      "fps",          "fps_frames", "reference", "target",
-    "paper",   "paper_source", "variant",     "points",       "curves"};
+const std::set<std::string> kTopKeys = {"name",        "title",        "kind",
+                                        "scenes",      "scene_grid",   "backends",
+                                        "exclude",     "params",       "grid",
+                                        "knob_points", "environments", "views",
+                                        "image",       "btf",          "repeats",
+                                        "timing",      "images",       "fps",
+                                        "fps_frames",  "reference",    "target",
+                                        "paper",       "paper_source", "variant",
+                                        "points",      "curves",       "frobenius_relights"};
 const std::set<std::string> kCurveKeys = {"backend", "x",     "y",     "series",
                                           "panel",   "log_x", "log_y", "title"};
 
@@ -187,6 +191,7 @@ nlohmann::json evaluation_json(const ExperimentSpec& s) {
           {"width", s.width},
           {"height", s.height},
           {"repeats", s.repeats},
+          {"frobenius_relights", s.frobenius_relights},
           {"timing", s.timing},
           {"images", s.images},
           {"fps", s.fps},
@@ -436,14 +441,17 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
         const auto& entry = registry.get(c.backend);
         for (const std::string* key : {&c.x, &c.series, &c.panel}) {
           if (key->empty()) continue;
-          const bool known = std::any_of(entry.params.begin(), entry.params.end(),
-                                         [&](const ParamSpec& p) { return p.key == *key; }) ||
-                             (key == &c.x && std::ranges::count(point_record_columns(), *key) > 0);
+          const bool known =
+              std::any_of(entry.params.begin(), entry.params.end(),
+                          [&](const ParamSpec& p) { return p.key == *key; }) ||
+              (key == &c.x && (std::ranges::count(point_record_columns(), *key) > 0 ||
+                               key->starts_with("metrics.")));
           if (!known)
             throw InputError(
                 file,
-                line_of(e) + fmt::format("curve: '{}' is not a parameter of {}{}", *key, c.backend,
-                                         key == &c.x ? " nor a points.csv column" : ""));
+                line_of(e) +
+                    fmt::format("curve: '{}' is not a parameter of {}{}", *key, c.backend,
+                                key == &c.x ? " nor a points.csv column nor metrics.<name>" : ""));
         }
       }
       s.curves.push_back(std::move(c));
@@ -509,6 +517,8 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
       s.btf_view_side = int_in(file, *v, "btf.view_side", 1, 64);
   }
   if (const auto* r = t["repeats"].node()) s.repeats = int_in(file, *r, "repeats", 1, 100000);
+  if (const auto* r = t["frobenius_relights"].node())
+    s.frobenius_relights = int_in(file, *r, "frobenius_relights", 0, 100000);
   if (const auto* v = t["timing"].node()) s.timing = scalar<bool>(file, *v, "timing");
   if (const auto* v = t["images"].node()) s.images = scalar<bool>(file, *v, "images");
   if (const auto* v = t["fps"].node()) s.fps = scalar<bool>(file, *v, "fps");

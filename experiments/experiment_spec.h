@@ -45,8 +45,9 @@ struct TargetSpec {
 };
 
 /// A plot of a sweep (docs/experiments.md "Curves"): one backend's points, `y` (a points.csv
-/// column) against the parameter `x`, one line per value of the parameter `series`, one panel
-/// per value of `panel` (optional). The CPCA paper's Fig. 2/3 are such curves.
+/// column, or metrics.<name>: a backend metric) against the parameter `x`, one line per value of
+/// the parameter `series`, one panel per value of `panel` (optional). The CPCA paper's Fig. 2/3 are
+/// such curves.
 struct CurveSpec {
   std::string backend;
   std::string x;
@@ -88,7 +89,10 @@ struct ExperimentSpec {
   /// BTF holds texels^2 x views x M floats per colour.
   int btf_resolution = 32;
   int btf_view_side = 12;
-  int repeats = 10;                        ///< timed relights per point (median)
+  int repeats = 10;  ///< timed relights per point (median)
+  /// Relights of the harness's Frobenius error of T per point; 0 skips it (the frobenius_*
+  /// columns are then empty), for experiments whose error is a backend metric.
+  int frobenius_relights = 64;
   bool timing = true;                      ///< false: no timings (deterministic results, for tests)
   bool images = true;                      ///< render images and image errors
   bool fps = false;                        ///< time view-change and light-change frames per point

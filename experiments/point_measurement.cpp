@@ -24,7 +24,7 @@ namespace {
 using json = nlohmann::json;
 
 // Bump when a point's record changes meaning or layout: cached points are then recomputed.
-constexpr std::uint32_t kPointVersion = 6;
+constexpr std::uint32_t kPointVersion = 7;
 constexpr const char* kPointKind = "experiment-point";
 
 json null_if_nan(double v) {
@@ -104,7 +104,8 @@ const std::vector<std::string>& point_record_columns() {
                                                    "nnz",
                                                    "pareto_time",
                                                    "pareto_storage",
-                                                   "point_key"};
+                                                   "point_key",
+                                                   "backend_metrics"};
   return columns;
 }
 
@@ -173,6 +174,7 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
 
     EvaluationOptions eo;
     eo.repeats = spec.timing ? spec.repeats : 1;
+    eo.frobenius_relights = spec.frobenius_relights;
     const BackendEvaluation ev = evaluate_backend(*cr.compressed, t, b.lights, o.device, eo);
     r["device"] = ev.device;
     if (spec.timing) {
@@ -182,12 +184,14 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     r["opencl_vs_cpp_rel_l2"] = ev.opencl_vs_cpp ? json(*ev.opencl_vs_cpp) : json(nullptr);
     r["lstar_rel_l2_mean"] = ev.mean_rel_l2;
     r["lstar_rel_l2_max"] = ev.max_rel_l2;
-    r["frobenius_rel"] = ev.frobenius.relative;
-    r["frobenius_stderr"] = ev.frobenius.standard_error;
-    r["frobenius_exact"] = ev.frobenius.exact;
-    // The squared error ||T~ - T||_F^2 the CPCA and SRBF papers report as SE.
-    r["frobenius_se"] =
-        ev.frobenius.relative * ev.frobenius.relative * b.info.at("frobenius_sq").get<double>();
+    if (ev.frobenius.relights > 0) {  // else skipped: frobenius_relights = 0
+      r["frobenius_rel"] = ev.frobenius.relative;
+      r["frobenius_stderr"] = ev.frobenius.standard_error;
+      r["frobenius_exact"] = ev.frobenius.exact;
+      // The squared error ||T~ - T||_F^2 the CPCA and SRBF papers report as SE.
+      r["frobenius_se"] =
+          ev.frobenius.relative * ev.frobenius.relative * b.info.at("frobenius_sq").get<double>();
+    }
     // The backend's own ||T~ - T||_F^2 when it computes one while compressing (exact, where the
     // measured value above is an estimate from a few relights): the curves plot it.
     if (const auto expected = cr.compressed->expected_frobenius_error()) {
@@ -196,6 +200,17 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
       r["frobenius_se_declared"] = nullptr;
     }
     r["max_vertex_rel"] = ev.max_vertex_rel;
+    // What the backend measured of itself (its own signal's error, ...): null when it declares
+    // nothing, so that the column stays empty for most backends.
+    json metrics = json::object(), meanings = json::object();
+    for (const BackendMetric& m : cr.compressed->backend_metrics()) {
+      metrics[m.name] = null_if_nan(m.value);
+      meanings[m.name] = m.meaning;
+    }
+    if (!metrics.empty()) {
+      r["backend_metrics"] = metrics;
+      r["backend_metric_meanings"] = meanings;
+    }
 
     json errors = json::array();
     std::map<std::string, double> relight_by_env;  // median frame relight per environment

@@ -36,7 +36,9 @@ PointOutcome measure_point(const SceneBench& bench, const ExperimentSpec& spec,
                            StageCache& cache, const BenchOptions& options);
 
 /// The columns of points.csv, in order: every record has exactly these keys (null where a
-/// value does not apply).
+/// value does not apply). "backend_metrics" is an object {name: value} of what the backend
+/// measured of itself (CompressedTransfer::backend_metrics(); a JSON cell in points.csv), with
+/// "backend_metric_meanings" {name: meaning} beside it in the record.
 const std::vector<std::string>& point_record_columns();
 /// The columns of errors.csv (one row per point, environment and view).
 const std::vector<std::string>& error_record_columns();

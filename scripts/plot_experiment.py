@@ -208,6 +208,13 @@ def param_value(v):
         return v
 
 
+def point_value(p, key):
+    """A points.csv column of the point, or "metrics.<name>": its backend metric <name>."""
+    if key.startswith("metrics."):
+        return (p.get("backend_metrics") or {}).get(key[len("metrics."):])
+    return p.get(key)
+
+
 def curve_plots(result, folder):
     """The experiment's [[curves]]: y against a parameter, a line per series value, a panel per
     panel value (the CPCA paper's Fig. 2 and 3 are such plots)."""
@@ -215,12 +222,12 @@ def curve_plots(result, folder):
     for n, curve in enumerate(result["experiment"].get("curves", [])):
         for scene in [s["scene"] for s in result["scenes"]]:
             pts = [p for p in points if p["scene"] == scene and p["backend"] == curve["backend"]
-                   and number(p.get(curve["y"])) is not None]
+                   and number(point_value(p, curve["y"])) is not None]
             if not pts:
                 continue
             # A parameter, or (x only) a points.csv column such as storage_mb.
             par = lambda p, k: (param_value(p["canonical_params"][k]) if k in p["canonical_params"]
-                                else p.get(k)) if k else ""
+                                else point_value(p, k)) if k else ""
             panels = sorted({par(p, curve["panel"]) for p in pts},
                             key=lambda v: (isinstance(v, str), v))
             fig, axes = plt.subplots(1, len(panels), figsize=(4.8 * len(panels), 3.9), squeeze=False,
@@ -235,7 +242,7 @@ def curve_plots(result, folder):
                     sp = sorted([p for p in pp if par(p, curve["series"]) == sv],
                                 key=lambda p: par(p, curve["x"]))
                     xs = [par(p, curve["x"]) for p in sp]
-                    ys = [max(p[curve["y"]], 1e-12) for p in sp]
+                    ys = [max(point_value(p, curve["y"]), 1e-12) for p in sp]
                     label = f'{curve["series"]} = {sv}' if curve["series"] else curve["backend"]
                     ax.plot(xs, ys, "o-", ms=3.5, lw=1.2, label=label,
                             color=cmap(i / max(1, len(series) - 1)))

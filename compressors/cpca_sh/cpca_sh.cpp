@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
@@ -28,6 +29,7 @@ struct CpcaShParams {
   WeightFormat format = WeightFormat::kFloat32;
   Projection projection = Projection::kLeastSquares;
   Metric metric = Metric::kHemisphere;
+  Signal signal = Signal::kMatrix;
   int order = kInputOrder;
   int output_order = kInputOrder;
 };
@@ -56,18 +58,29 @@ class CpcaShCompressor final : public Compressor {
                                        sh.vertex_count(), t.vertex_count()));
     if (t.vertex_count() == 0)
       throw ParameterError(fmt::format("{}: the transfer has no vertices", kName));
+    const bool diffuse = p_.signal == Signal::kDiffuse;
+    if (diffuse && sh.order() < 2)
+      throw ParameterError(fmt::format(
+          "{}: signal = diffuse needs the cosine row of an SH transfer of order 2 or more, the "
+          "input has order {}",
+          kName, sh.order()));
 
     CpcaShArrays shape;
     shape.vertices = t.vertex_count();
     shape.order = p_.order;
-    shape.output_order = p_.output_order;
-    shape.projection = p_.projection;
-    shape.metric = p_.metric;
+    // The diffuse signal is a vector over the whole sphere of light directions: one output row,
+    // the zero-hemisphere M_p it is exact for, and the Euclidean (the paper's) norm.
+    shape.output_order = diffuse ? 1 : p_.output_order;
+    shape.projection = diffuse ? Projection::kZero : p_.projection;
+    shape.metric = diffuse ? Metric::kSphere : p_.metric;
     shape.method = p_.options.method;
     shape.format = p_.format;
+    shape.signal = p_.signal;
     const std::size_t dim = shape.signal_dim();
-    std::vector<double> x = transfer_signals(sh, p_.order, p_.output_order, p_.projection);
-    if (p_.metric == Metric::kHemisphere) to_hemisphere_metric(x, shape);
+    std::vector<double> x = diffuse
+                                ? diffuse_transfer_signals(sh, p_.order)
+                                : transfer_signals(sh, p_.order, p_.output_order, p_.projection);
+    if (shape.metric == Metric::kHemisphere) to_hemisphere_metric(x, shape);
     const RowSet signals = RowSet::dense(std::span<const double>(x), shape.vertices, dim);
 
     ClusteredPcaOptions o = p_.options;
@@ -121,6 +134,12 @@ Metric metric_from(std::string_view name) {
   throw ParameterError(fmt::format("{}: metric '{}' is none of sphere, hemisphere", kName, name));
 }
 
+Signal signal_from(std::string_view name) {
+  for (Signal s : {Signal::kMatrix, Signal::kDiffuse})
+    if (to_string(s) == name) return s;
+  throw ParameterError(fmt::format("{}: signal '{}' is none of matrix, diffuse", kName, name));
+}
+
 CpcaMethod method_from(std::string_view name) {
   for (CpcaMethod m : {CpcaMethod::kStatic, CpcaMethod::kIterative, CpcaMethod::kAdaptive})
     if (to_string(m) == name) return m;
@@ -143,6 +162,10 @@ Projection projection_from(std::string_view name) {
 }
 
 }  // namespace
+
+std::string_view to_string(Signal s) {
+  return s == Signal::kDiffuse ? "diffuse" : "matrix";
+}
 
 std::string_view to_string(WeightFormat f) {
   switch (f) {
@@ -224,6 +247,22 @@ std::vector<double> transfer_signals(const ShTransfer& sh, int order, int output
       const Eigen::VectorXd c = projector->solve(b);
       for (int i = 0; i < rows; ++i) out[static_cast<std::size_t>(i) * n + k] = c[i];
     }
+  });
+  return x;
+}
+
+std::vector<double> diffuse_transfer_signals(const ShTransfer& sh, int order) {
+  PRT_CHECK(order >= 1 && order <= sh.order() && sh.order() >= 2,
+            "diffuse_transfer_signals: order {} for an SH transfer of order {}", order, sh.order());
+  const int n = order * order, full = sh.dim();
+  // Row sh_index(1, 0) = 2 of M_p: y_{1,0}(F^T d) = sqrt(3 / (4 pi)) (d . n).
+  const std::size_t row = 2;
+  const double scale = std::sqrt(4.0 * std::numbers::pi / 3.0);
+  std::vector<double> x(sh.vertex_count() * static_cast<std::size_t>(n));
+  tbb::parallel_for(std::size_t{0}, sh.vertex_count(), [&](std::size_t v) {
+    const std::span<const double> m = sh.matrix(v);
+    for (int k = 0; k < n; ++k)
+      x[v * static_cast<std::size_t>(n) + k] = scale * m[row * static_cast<std::size_t>(full) + k];
   });
   return x;
 }
@@ -344,6 +383,8 @@ CpcaShArrays encode(const ClusteredPca& model, const RowSet& points, CpcaShArray
   const std::vector<std::uint64_t> offsets(a.weight_offsets.begin(), a.weight_offsets.end());
   const double se = affine_codebook_squared_error(points, a.ids, reps, a.first, w, offsets);
   a.signal_error = model.total_squared_norm > 0 ? std::sqrt(se / model.total_squared_norm) : 0.0;
+  a.signal_squared_error = se;
+  a.signal_squared_norm = model.total_squared_norm;
   return a;
 }
 
@@ -418,10 +459,37 @@ void CpcaShTransfer::shape_output(LocalRadiance& out) const {
   }
 }
 
+std::vector<BackendMetric> CpcaShTransfer::backend_metrics() const {
+  const std::string norm =
+      a_.signal == Signal::kDiffuse
+          ? "the diffuse transfer vectors t_p (Euclidean)"
+          : fmt::format("the {} x {} transfer matrices X_p ({} norm)", a_.rows(), a_.n(),
+                        a_.metric == Metric::kHemisphere ? "hemisphere" : "Euclidean");
+  return {
+      {"signal_squared_error", a_.signal_squared_error,
+       fmt::format("sum over vertices of ||X~_p - X_p||^2 of {}, the model as stored", norm)},
+      {"signal_squared_norm", a_.signal_squared_norm,
+       fmt::format("sum over vertices of ||X_p||^2 of {}", norm)},
+      {"signal_relative_error", a_.signal_error,
+       "sqrt(signal_squared_error / signal_squared_norm)"},
+      {"cost_model_floats", static_cast<double>(a_.weight_values.size() + a_.reps.size()),
+       "the paper's storage cost (section 4.1): per-vertex weights plus representative values, "
+       "m_p n' + m_c (n' + 1) n for uniform counts"},
+  };
+}
+
+std::vector<Rgb> scaled_light(const CpcaShArrays& a, std::span<const Rgb> light) {
+  std::vector<Rgb> l(light.begin(), light.end());
+  const float s = a.light_scale();
+  if (s != 1.0f)
+    for (Rgb& v : l) v *= s;
+  return l;
+}
+
 void CpcaShTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_light(light);
   shape_output(out);
-  const std::vector<Rgb> q = representative_products(a_, light.values);
+  const std::vector<Rgb> q = representative_products(a_, scaled_light(a_, light.values));
   blend_vertices(a_, q, out.values);
 }
 
@@ -431,7 +499,7 @@ void CpcaShTransfer::relight_vertices(const LightCoeffs& light,
   check_light(light);
   check_vertex_subset(vertices, a_.vertices, kName);
   shape_output(out);
-  const std::vector<Rgb> q = representative_products(a_, light.values);
+  const std::vector<Rgb> q = representative_products(a_, scaled_light(a_, light.values));
   blend_vertex_subset(a_, q, vertices, out.values);
 }
 
@@ -452,6 +520,9 @@ void CpcaShTransfer::save(ArchiveWriter& archive) const {
   archive.add_meta("signal_error", a_.signal_error);
   archive.add_meta("local_count", a_.local_count);
   archive.add_meta("frobenius_error", a_.frobenius_error);
+  archive.add_meta("signal", std::string(to_string(a_.signal)));
+  archive.add_meta("signal_squared_error", a_.signal_squared_error);
+  archive.add_meta("signal_squared_norm", a_.signal_squared_norm);
   std::vector<std::uint16_t> counts(a_.clusters());
   for (std::size_t c = 0; c < a_.clusters(); ++c)
     counts[c] = static_cast<std::uint16_t>(a_.vectors_of(c));
@@ -480,9 +551,10 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   if (version != kStateVersion)
     throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
                            kStateVersion,
-                           version == 1 ? " (version 1 holds no local bin count and no model "
-                                          "error; compress the transfer again)"
-                                        : ""));
+                           version < kStateVersion
+                               ? " (older versions hold no local bin count, model error or "
+                                 "signal; compress the transfer again)"
+                               : ""));
   CpcaShArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.order = r.meta_value<int>("order");
@@ -491,7 +563,10 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   a.signal_error = r.meta_value<double>("signal_error");
   a.local_count = r.meta_value<int>("local_count");
   a.frobenius_error = r.meta_value<double>("frobenius_error");
+  a.signal_squared_error = r.meta_value<double>("signal_squared_error");
+  a.signal_squared_norm = r.meta_value<double>("signal_squared_norm");
   try {
+    a.signal = signal_from(r.meta_value<std::string>("signal"));
     a.projection = projection_from(r.meta_value<std::string>("projection"));
     a.metric = metric_from(r.meta_value<std::string>("metric"));
     a.method = method_from(r.meta_value<std::string>("method"));
@@ -509,6 +584,15 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   const int side = static_cast<int>(std::lround(std::sqrt(std::max(a.local_count, 0))));
   if (a.local_count < 1 || side * side != a.local_count)
     throw fail(fmt::format("local_count {} is no square grid S^2 >= 1", a.local_count));
+  if (!(std::isfinite(a.signal_error) && a.signal_error >= 0) ||
+      !(std::isfinite(a.signal_squared_error) && a.signal_squared_error >= 0) ||
+      !(std::isfinite(a.signal_squared_norm) && a.signal_squared_norm >= 0))
+    throw fail("a signal error or norm is not a finite non-negative number");
+  if (a.signal == Signal::kDiffuse &&
+      (a.output_order != 1 || a.projection != Projection::kZero || a.metric != Metric::kSphere))
+    throw fail(fmt::format(
+        "the diffuse signal has output order 1, zero projection and sphere metric, not {}, {}, {}",
+        a.output_order, to_string(a.projection), to_string(a.metric)));
   constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
   if (a.vertices > kU32 / static_cast<std::uint64_t>(a.rows()))
     throw fail(fmt::format("{} vertices x {} output rows do not fit the relight's u32 index",
@@ -652,6 +736,33 @@ CompressorEntry registry_entry() {
        {},
        "SH order of the transferred radiance (output_order^2 rows, e.g. 4 for the paper's 16 x "
        "25); 0: the same as order; at most order"},
+      {"signal",
+       ParamType::kEnum,
+       "matrix",
+       std::nullopt,
+       std::nullopt,
+       {"matrix", "diffuse"},
+       "what is clustered per vertex: matrix = the output_order^2 x order^2 transfer matrix; "
+       "diffuse = the paper's order^2-D shadowed diffuse transfer vector sqrt(4 pi / 3) M_p[2, :] "
+       "(Fig. 2-4; projection, metric and output_order do not apply)"},
+      {"adaptive_rule",
+       ParamType::kEnum,
+       "storage",
+       std::nullopt,
+       std::nullopt,
+       {"storage", "sloan"},
+       "adaptive redistribution: storage = D_i^2 / (bytes of the vector's weights and its "
+       "floats) within what n' vectors per cluster store; sloan = the paper's D_i^2 / m_k until "
+       "the per-vertex weights reach n' per vertex (section 4.3)"},
+      {"pca_updates",
+       ParamType::kEnum,
+       "warm",
+       std::nullopt,
+       std::nullopt,
+       {"warm", "converged"},
+       "PCA after each classification: warm = one subspace iteration from the previous vectors "
+       "(the last update converged); converged = every update to convergence (the paper's PCA "
+       "per pass; the adaptive ranking reads converged D_i^2)"},
   };
   e.inputs.sh_order = kInputOrder;
   e.output_basis = RadianceBasis::kSphericalHarmonics;
@@ -680,16 +791,25 @@ CompressorEntry registry_entry() {
         "projection", {{"zero", Projection::kZero}, {"least_squares", Projection::kLeastSquares}});
     c.metric = p.get_enum<Metric>(
         "metric", {{"sphere", Metric::kSphere}, {"hemisphere", Metric::kHemisphere}});
+    c.signal =
+        p.get_enum<Signal>("signal", {{"matrix", Signal::kMatrix}, {"diffuse", Signal::kDiffuse}});
+    c.options.adaptive_rule = p.get_enum<CpcaAdaptiveRule>(
+        "adaptive_rule",
+        {{"storage", CpcaAdaptiveRule::kStorage}, {"sloan", CpcaAdaptiveRule::kSloan}});
+    c.options.converge_every_update =
+        p.get_enum<bool>("pca_updates", {{"warm", false}, {"converged", true}});
     c.order = static_cast<int>(p.get_int("order"));
     const int output = static_cast<int>(p.get_int("output_order"));
     c.output_order = output == 0 ? c.order : output;
-    if (c.output_order > c.order)
+    if (c.signal == Signal::kDiffuse && c.order < 1)
+      throw ParameterError(fmt::format("{}: signal = diffuse needs order >= 1", kName));
+    if (c.signal == Signal::kMatrix && c.output_order > c.order)
       throw ParameterError(
           fmt::format("{}: output_order = {} exceeds order = {}", kName, c.output_order, c.order));
     return std::make_unique<CpcaShCompressor>(std::move(c));
   };
   e.load = &CpcaShTransfer::load;
-  e.version = 2;
+  e.version = 3;
   return e;
 }
 

@@ -6,6 +6,11 @@
 //
 //   zero projection           X_p = M_p[0:rows, 0:n]                (ShTransfer, sh_transfer.h)
 //   least-squares projection  X_p = A^-1 M_p[0:rows, 0:n]           (the paper's eq. (1))
+//   diffuse signal            t_p = sqrt(4 pi / 3) M_p[2, 0:n]       (1 x n)
+//
+// The diffuse signal is the paper's 25-D shadowed diffuse transfer vector (its Fig. 2-4),
+// t_p[k] = integral of y_k(d) V_p(d) max(d.n, 0) dd: row 2 of M_p is y_{1,0} = sqrt(3 / (4 pi))
+// z in the local frame, so the cosine-weighted row is exact in the quadrature of M_p.
 //
 // with A the hemisphere Gram matrix of output_order (hemisphere_projection.h). Every X_p is
 // approximated in the affine subspace of its cluster, X~_p = X_0 + sum_i w_i X_i, so a relight
@@ -32,13 +37,19 @@ namespace prt::cpca_sh {
 
 inline constexpr std::string_view kName = "cpca_sh";
 /// Version of this backend's archive sections and metadata (bumped when they change).
-inline constexpr int kStateVersion = 2;
+inline constexpr int kStateVersion = 3;
 /// The SH order of the transfer the entry asks prepare_scene() for (BackendInputs are static):
 /// the `order` parameter takes the leading order^2 x order^2 block of it, which is exactly the
 /// transfer of the lower order (both SH index sets are prefixes).
 inline constexpr int kInputOrder = 5;
 
 enum class WeightFormat { kFloat32, kFloat16, kS8 };
+/// What is clustered per vertex: the transfer matrix X_p, or the diffuse transfer vector t_p.
+enum class Signal { kMatrix, kDiffuse };
+/// The relight of the diffuse signal returns order-1 SH coefficients of the uniform incident
+/// radiance with the same cosine-weighted integral: c_0 = sqrt(4 pi) (t_p . l) / pi, so a
+/// Lambertian material shades it as diffuse PRT does. Both relight paths scale the light by it.
+inline constexpr double kDiffuseRadianceScale = 1.1283791670955126;  // 2 / sqrt(pi)
 enum class Projection { kZero, kLeastSquares };
 /// The norm CPCA minimises: kSphere the Euclidean norm of the coefficients (the squared error
 /// over the sphere), kHemisphere the squared error over the upper hemisphere, the only part the
@@ -48,6 +59,7 @@ std::string_view to_string(WeightFormat f);
 std::string_view to_string(Projection p);
 std::string_view to_string(Metric m);
 std::string_view to_string(CpcaMethod m);
+std::string_view to_string(Signal s);
 
 /// The arrays both relight paths read.
 struct CpcaShArrays {
@@ -58,6 +70,8 @@ struct CpcaShArrays {
   Metric metric = Metric::kHemisphere;
   CpcaMethod method = CpcaMethod::kIterative;
   WeightFormat format = WeightFormat::kFloat32;
+  /// kDiffuse: rows = 1 (output_order 1), projection zero, metric sphere.
+  Signal signal = Signal::kMatrix;
   /// Representatives, rep after rep, each a rows x n row-major matrix: cluster c owns reps
   /// first[c] (its mean) to first[c + 1] - 1 (its vectors).
   std::vector<float> reps;
@@ -80,6 +94,10 @@ struct CpcaShArrays {
   /// ||T~ - T||_F / ||T||_F of the stored model read as the pixel-basis transfer
   /// T~_p = B X~_p Y (sh_matrix_model.h), computed in double while compressing.
   double frobenius_error = 0;
+  /// sum_p ||X~_p - X_p||^2 and sum_p ||X_p||^2 over all vertices in the metric's norm, of the
+  /// stored model (the squared error the paper reports as "total squared error of the signal").
+  double signal_squared_error = 0;
+  double signal_squared_norm = 0;
 
   int n() const { return order * order; }
   int rows() const { return output_order * output_order; }
@@ -91,6 +109,10 @@ struct CpcaShArrays {
   std::size_t id_bytes() const;
   /// Every cluster has the same number of vectors (static and iterative), or -1.
   int uniform_vectors() const;
+  /// What the relight multiplies the light by: kDiffuseRadianceScale or 1.
+  float light_scale() const {
+    return signal == Signal::kDiffuse ? static_cast<float>(kDiffuseRadianceScale) : 1.0f;
+  }
 };
 
 /// Fills weight_offsets and weight_values from ids, first and the stored weights.
@@ -100,6 +122,12 @@ void derive_vertex_layout(CpcaShArrays& a);
 /// block of each M_p, projected least-squares onto the hemisphere when asked.
 std::vector<double> transfer_signals(const ShTransfer& sh, int order, int output_order,
                                      Projection projection);
+
+/// The diffuse signals (vertices x n, double): t_p[k] = sqrt(4 pi / 3) M_p[2][k], k < order^2.
+std::vector<double> diffuse_transfer_signals(const ShTransfer& sh, int order);
+
+/// The light as both relight paths multiply it: times light_scale().
+std::vector<Rgb> scaled_light(const CpcaShArrays& a, std::span<const Rgb> light);
 
 /// q = X_r l for every representative r (rep_count() x rows RGB values, rep after rep), each
 /// entry summed over k in increasing order, as the kernel does.
@@ -140,6 +168,9 @@ class CpcaShTransfer final : public CompressedTransfer, public StoredModel {
   /// B X~_p (Y L) in double per vertex, X~_p rebuilt from the stored factors.
   ModelRadiance model_radiance(const Cubemap& radiance) const override;
   RadianceBasis output_basis() const override { return RadianceBasis::kSphericalHarmonics; }
+  /// signal_squared_error, signal_squared_norm and signal_relative_error of the stored model,
+  /// and cost_model_floats, the paper's storage cost (section 4.1).
+  std::vector<BackendMetric> backend_metrics() const override;
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   bool supports_vertex_subset() const override { return true; }

@@ -31,7 +31,8 @@ class CpcaShDevice final : public DeviceRelighter {
         n_(static_cast<std::size_t>(a.n())),
         products_count_(a.rep_count() * rows_),
         light_basis_(std::move(light_basis)),
-        light_host_(n_) {
+        light_host_(n_),
+        light_scale_(a.light_scale()) {
     if (vertices_ * rows_ > std::numeric_limits<std::uint32_t>::max() ||
         a.reps.size() > std::numeric_limits<std::uint32_t>::max())
       throw ParameterError(
@@ -161,7 +162,14 @@ class CpcaShDevice final : public DeviceRelighter {
           fmt::format("{}: the light is in basis '{}' with {} values, the "
                       "transfer needs '{}' with {}",
                       kName, light.basis, light.values.size(), light_basis_, n_));
-    upload_light(ctx_, light_, light.values, light_host_, "cpca_sh light");
+    if (light_scale_ == 1.0f) {
+      upload_light(ctx_, light_, light.values, light_host_, "cpca_sh light");
+    } else {
+      // The same float products as scaled_light() in the C++ relight.
+      std::vector<Rgb> scaled(light.values);
+      for (Rgb& v : scaled) v *= light_scale_;
+      upload_light(ctx_, light_, scaled, light_host_, "cpca_sh light");
+    }
     if (products_count_ == 0) return 0.0;
     cl::Event event = launch(ctx_, "cpca_sh.products", products_kernel_,
                              LaunchRange::linear(products_count_, kWorkGroup));
@@ -172,6 +180,7 @@ class CpcaShDevice final : public DeviceRelighter {
   std::size_t vertices_, rows_, n_, products_count_;
   std::string light_basis_;
   std::vector<cl_float4> light_host_;
+  float light_scale_;
   cl::Kernel products_kernel_, blend_, blend_vertices_;
   cl::Buffer ids_, first_, offsets_, weights_, scales_, representatives_, products_, light_, out_;
   std::uint64_t bytes_ = 0;

@@ -231,6 +231,73 @@ TEST(ClusteredPca, IterativeBeatsStaticAndAdaptiveBeatsIterativeWithinTheBudget)
   EXPECT_GT(it.times.classify_flops, 0.0);
 }
 
+CpcaCluster cluster_with(std::size_t count, std::vector<double> eigenvalues) {
+  CpcaCluster c;
+  c.count = count;
+  c.eigenvalues = Eigen::Map<const Eigen::VectorXd>(eigenvalues.data(),
+                                                    static_cast<Eigen::Index>(eigenvalues.size()));
+  return c;
+}
+
+// Section 4.3 of the paper: rank every vector by D_i^2 / m_k and add vectors in that order until
+// the per-point weights reach the budget. Three clusters of 100, 50 and 10 points, n' = 1: the
+// budget is 160 weights. Rates: cluster 2 (m = 10) 8, 5, 3, 1; cluster 1 (m = 50) 6, 2; cluster 0
+// (m = 100) 1.5, 0.5. In order: 2#0 (10 weights), 1#0 (60), 2#1 (70), 2#2 (80), 1#1 (130), then
+// 0#0 would need 230 > 160: the allocation ends there, so 2#3 (rate 1, 10 weights) is not added.
+TEST(ClusteredPca, SloanRuleAllocatesByErrorPerPointUntilTheWeightBudget) {
+  const std::vector<CpcaCluster> clusters = {cluster_with(100, {150, 50}),
+                                             cluster_with(50, {300, 100}),
+                                             cluster_with(10, {80, 50, 30, 10})};
+  EXPECT_EQ(adaptive_allocation(clusters, 1, CpcaAdaptiveRule::kSloan, 1.0, 25),
+            (std::vector<int>{0, 2, 3}));
+  // The weight cost and the dimension do not enter the paper's rule.
+  EXPECT_EQ(adaptive_allocation(clusters, 1, CpcaAdaptiveRule::kSloan, 0.25, 6144),
+            (std::vector<int>{0, 2, 3}));
+  // prtlab's rule with the same costs (dim 0: a vector costs its m_c weights) skips 0#0 and
+  // still fits 2#3 (140 weights).
+  EXPECT_EQ(adaptive_allocation(clusters, 1, CpcaAdaptiveRule::kStorage, 1.0, 0),
+            (std::vector<int>{0, 2, 4}));
+  // With 25 floats per vector the costs are 125, 75, 35 and the budget 235: rates 1#0 4,
+  // 2#0 2.29, 2#1 1.43, 1#1 1.33 (220 in all), then nothing else fits.
+  EXPECT_EQ(adaptive_allocation(clusters, 1, CpcaAdaptiveRule::kStorage, 1.0, 25),
+            (std::vector<int>{0, 2, 2}));
+  // n' = 2: budget 320 weights. After 1#1 (130): 0#0 (230), 2#3 (240), 0#1 (340 > 320) ends it.
+  EXPECT_EQ(adaptive_allocation(clusters, 2, CpcaAdaptiveRule::kSloan, 1.0, 25),
+            (std::vector<int>{1, 2, 4}));
+  // An empty cluster gets nothing, whatever its eigenvalues.
+  const std::vector<CpcaCluster> with_empty = {cluster_with(0, {1e9}), cluster_with(10, {5, 4})};
+  EXPECT_EQ(adaptive_allocation(with_empty, 1, CpcaAdaptiveRule::kSloan, 1.0, 25),
+            (std::vector<int>{0, 1}));
+}
+
+// The paper's rule inside the engine: the weights never exceed m n', and with converged PCA
+// updates the result is a consistent model like every other method's.
+TEST(ClusteredPca, SloanRuleKeepsThePerPointWeightBudget) {
+  const Csr s = grouped_rows(900, 120, 20, {1, 1, 1, 6, 7, 1, 5, 1}, kSeed + 3);
+  ClusteredPcaOptions o;
+  o.clusters = 8;
+  o.components = 3;
+  o.seed = kSeed;
+  o.method = CpcaMethod::kIterative;
+  const ClusteredPca it = clustered_pca(s.set(), o);
+  o.method = CpcaMethod::kAdaptive;
+  o.adaptive_rule = CpcaAdaptiveRule::kSloan;
+  for (const bool converged : {false, true}) {
+    SCOPED_TRACE(converged ? "converged updates" : "warm updates");
+    o.converge_every_update = converged;
+    const ClusteredPca ad = clustered_pca(s.set(), o);
+    expect_consistent(ad, s, "adaptive, sloan");
+    EXPECT_LE(ad.weight_count(), std::uint64_t{900 * 3});
+    EXPECT_LT(ad.squared_error, it.squared_error);
+    int lo = 1 << 30, hi = 0;
+    for (const CpcaCluster& c : ad.clusters) {
+      lo = std::min(lo, c.k());
+      hi = std::max(hi, c.k());
+    }
+    EXPECT_LT(lo, hi) << "the paper's rule gave every cluster the same count";
+  }
+}
+
 TEST(ClusteredPca, IsDeterministicAndMatchesOnDenseInput) {
   const Csr s = grouped_rows(300, 50, 10, {2, 3, 1}, kSeed + 4);
   ClusteredPcaOptions o;

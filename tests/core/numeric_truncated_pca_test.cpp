@@ -1,6 +1,7 @@
 // Truncated PCA against Eigen's dense eigen-decomposition of the explicit scatter matrix, for the
 // Gram and the subspace path, dense and CSR input; residual error, coefficients, rank-deficient
 // input, subsets and determinism.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -212,6 +213,25 @@ TEST(TruncatedPca, MoreComponentsThanRankCompleteAnOrthonormalBasis) {
   const Reference r = reference(x);
   for (int j = 4; j < 9; ++j) EXPECT_LE(p.eigenvalues[j], 1e-12 * r.eigenvalues[0]) << j;
   EXPECT_LE(p.residual_squared_error, 1e-12 * p.total_squared_error);
+}
+
+// Every component of a low-dimensional signal (k = n, as the adaptive CPCA of 25-D transfer
+// vectors asks of a cluster with few points): the completion must reach the whole space even
+// when the complement left is spread evenly over the axes, where no single unit vector keeps
+// half of its length.
+TEST(TruncatedPca, AllComponentsOfAFewRowsCompleteTheWholeSpace) {
+  for (int m : {3, 8, 12, 20}) {
+    for (std::uint64_t seed = 0; seed < 8; ++seed) {
+      SCOPED_TRACE(fmt::format("{} rows, seed {}", m, seed));
+      const Eigen::MatrixXd x = decaying_rows(m, 25, 0.8, kSeed + seed);
+      TruncatedPcaOptions o;
+      o.components = 25;
+      const TruncatedPca p = truncated_pca(RowSet::dense(x), o);
+      const Eigen::MatrixXd gram = p.components.transpose() * p.components;
+      EXPECT_LT((gram - Eigen::MatrixXd::Identity(25, 25)).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LE(p.residual_squared_error, 1e-12 * p.total_squared_error);
+    }
+  }
 }
 
 TEST(TruncatedPca, SubsetEqualsTheGatheredRows) {

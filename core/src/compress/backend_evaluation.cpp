@@ -128,8 +128,10 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
       ev.worst_vertex = v.worst_vertex;
     }
   }
-  ev.frobenius = frobenius_error(ct, exact, grid, options.frobenius_relights,
-                                 options.frobenius_relights, options.seed);
+  // 0 relights: the caller does not want the Frobenius error (ev.frobenius.relights = 0).
+  if (options.frobenius_relights > 0)
+    ev.frobenius = frobenius_error(ct, exact, grid, options.frobenius_relights,
+                                   options.frobenius_relights, options.seed);
   for (const auto& e : ev.errors) {
     ev.mean_rel_l2 += e.rel_l2 / static_cast<double>(ev.errors.size());
     ev.max_rel_l2 = std::max(ev.max_rel_l2, e.rel_l2);

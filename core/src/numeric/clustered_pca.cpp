@@ -140,8 +140,9 @@ class Engine {
       TruncatedPcaOptions po;
       po.components = kc;
       po.tolerance = o_.pca_tolerance;
-      po.max_iterations = converge ? 100 : o_.pca_iterations_per_pass;
-      if (!converge) po.oversampling = o_.pca_oversampling;
+      const bool full = converge || o_.converge_every_update;
+      po.max_iterations = full ? 100 : o_.pca_iterations_per_pass;
+      if (!full) po.oversampling = o_.pca_oversampling;
       po.seed = o_.seed * 0x9E3779B97F4A7C15ull + c;
       if (cl.components.cols() > 0) po.start = cl.components;
       const TruncatedPca p = truncated_pca(subset, po);
@@ -270,51 +271,11 @@ class Engine {
     int kmax = o_.adaptive_max_components > 0 ? o_.adaptive_max_components
                                               : std::max(1, 4 * o_.components);
     kmax = std::min<int>(kmax, static_cast<int>(n_));
-    // The paper's storage model (section 4.1): a vector of cluster c costs its m_c weights and
-    // its own n values. The budget is what the iterative result stores, so adaptive never
-    // stores more. (Section 4.3 ranks by D^2 / m_c, which is the same when n << m_c, as for
-    // its 25-D signals; for T's 6,144-D rows the representatives dominate and must count.)
-    const auto n = static_cast<double>(n_);
-    const double w = o_.adaptive_weight_cost;
-    const auto cost_of = [&](const CpcaCluster& cl) {
-      return w * static_cast<double>(cl.count) + n;
-    };
-    double budget = 0;
-    for (const CpcaCluster& cl : clusters_) budget += cost_of(cl) * o_.components;
-    // Round-off must not let the iterative allocation itself miss the budget.
-    budget *= 1 + 1e-12;
-    std::vector<int> k(nc, o_.components);
     for (int it = 0; it < o_.adaptive_iterations; ++it) {
       const std::size_t moved = classify();
       update(std::vector<int>(nc, kmax), it + 1 == o_.adaptive_iterations);
-      // Rank every candidate component by the squared error it removes per stored weight.
-      struct Candidate {
-        double rate;
-        std::uint32_t cluster;
-        int index;
-      };
-      std::vector<Candidate> cand;
-      for (std::size_t c = 0; c < nc; ++c) {
-        const CpcaCluster& cl = clusters_[c];
-        if (cl.count == 0) continue;
-        for (Eigen::Index i = 0; i < cl.eigenvalues.size(); ++i) {
-          if (cl.eigenvalues[i] > 0.0) {
-            cand.push_back({cl.eigenvalues[i] / cost_of(cl), static_cast<std::uint32_t>(c),
-                            static_cast<int>(i)});
-          }
-        }
-      }
-      std::stable_sort(cand.begin(), cand.end(),
-                       [](const Candidate& a, const Candidate& b) { return a.rate > b.rate; });
-      std::fill(k.begin(), k.end(), 0);
-      double used = 0;
-      for (const Candidate& cd : cand) {
-        const double cost = cost_of(clusters_[cd.cluster]);
-        if (cd.index == k[cd.cluster] && used + cost <= budget) {
-          ++k[cd.cluster];
-          used += cost;
-        }
-      }
+      const std::vector<int> k = adaptive_allocation(clusters_, o_.components, o_.adaptive_rule,
+                                                     o_.adaptive_weight_cost, n_);
       for (std::size_t c = 0; c < nc; ++c) {
         CpcaCluster& cl = clusters_[c];
         cl.components =
@@ -393,6 +354,57 @@ class Engine {
 };
 
 }  // namespace
+
+std::vector<int> adaptive_allocation(std::span<const CpcaCluster> clusters, int components,
+                                     CpcaAdaptiveRule rule, double weight_cost, std::size_t dim) {
+  const bool sloan = rule == CpcaAdaptiveRule::kSloan;
+  // A component of cluster c costs its m_c weights and, in the storage rule, its own dim
+  // values (the paper's storage model of section 4.1). The storage rule's budget is what n'
+  // components per cluster store, so adaptive never stores more than iterative; the paper's
+  // rule counts weights only (section 4.3 ranks by D^2 / m_c, the same ranking when dim << m_c,
+  // as for its 25-D signals; for T's 6,144-D rows the representatives dominate).
+  const auto n = static_cast<double>(dim);
+  const auto cost_of = [&](const CpcaCluster& cl) {
+    return sloan ? static_cast<double>(cl.count) : weight_cost * static_cast<double>(cl.count) + n;
+  };
+  double budget = 0;
+  for (const CpcaCluster& cl : clusters) budget += cost_of(cl) * components;
+  // Round-off must not let the uniform allocation itself miss the budget.
+  budget *= 1 + 1e-12;
+  struct Candidate {
+    double rate;
+    std::uint32_t cluster;
+    int index;
+  };
+  std::vector<Candidate> cand;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const CpcaCluster& cl = clusters[c];
+    if (cl.count == 0) continue;
+    for (Eigen::Index i = 0; i < cl.eigenvalues.size(); ++i) {
+      if (cl.eigenvalues[i] > 0.0) {
+        cand.push_back(
+            {cl.eigenvalues[i] / cost_of(cl), static_cast<std::uint32_t>(c), static_cast<int>(i)});
+      }
+    }
+  }
+  std::stable_sort(cand.begin(), cand.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.rate > b.rate; });
+  std::vector<int> k(clusters.size(), 0);
+  double used = 0;
+  for (const Candidate& cd : cand) {
+    // A cluster's components come in order: one that is not next is skipped (its rate can
+    // exceed its predecessor's only through rounding of nearly equal eigenvalues).
+    if (cd.index != k[cd.cluster]) continue;
+    const double cost = cost_of(clusters[cd.cluster]);
+    if (used + cost > budget) {
+      if (sloan) break;
+      continue;
+    }
+    ++k[cd.cluster];
+    used += cost;
+  }
+  return k;
+}
 
 ClusteredPca clustered_pca(const RowSet& points, const ClusteredPcaOptions& o) {
   const std::size_t m = points.rows();

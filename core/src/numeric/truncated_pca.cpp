@@ -92,7 +92,8 @@ RowMajorMatrixXd apply_ct(const A& a, const RowMajorMatrixXd& y, const Eigen::Ve
 
 // Modified Gram-Schmidt, twice, over the first `valid` columns; columns that are (numerically)
 // dependent on their predecessors, and all columns from `valid` on, are replaced by unit vectors
-// e_t orthogonalised the same way, so the result always has orthonormal columns.
+// e_t orthogonalised the same way (the first that keeps half its length, else the longest), so
+// the result always has orthonormal columns.
 void orthonormalise(Eigen::MatrixXd& u, Eigen::Index valid) {
   const Eigen::Index n = u.rows();
   Eigen::Index next_unit = 0;
@@ -112,7 +113,22 @@ void orthonormalise(Eigen::MatrixXd& u, Eigen::Index valid) {
       }
     }
     for (;; ++next_unit) {
-      PRT_CHECK(next_unit < n, "orthonormalise: no unit vector left to complete the basis");
+      if (next_unit >= n) {
+        // No unit vector kept half its length: the complement is spread over many axes (a basis
+        // completed to the whole space). The residuals' squared norms sum to the complement's
+        // dimension, so the longest is at least sqrt((n - j) / n).
+        PRT_CHECK(j < n, "orthonormalise: {} columns in dimension {}", u.cols(), n);
+        double longest = -1.0;
+        for (Eigen::Index t = 0; t < n; ++t) {
+          Eigen::VectorXd w = Eigen::VectorXd::Unit(n, t);
+          project_out(w, j);
+          if (w.norm() > longest) {
+            longest = w.norm();
+            v = w;
+          }
+        }
+        break;
+      }
       v = Eigen::VectorXd::Unit(n, next_unit);
       project_out(v, j);
       if (v.norm() > 0.5) break;

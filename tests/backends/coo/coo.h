@@ -42,6 +42,10 @@ class CooTransfer final : public CompressedTransfer {
   /// a whole row's light), only the expected Frobenius error is declared.
   double declared_error_bound() const override { return t_.expected_frobenius == 0 ? 0.0 : 1.0; }
   std::optional<double> expected_frobenius_error() const override { return t_.expected_frobenius; }
+  /// entries_kept: the triplets stored (a backend metric the harness tests read back).
+  std::vector<BackendMetric> backend_metrics() const override {
+    return {{"entries_kept", static_cast<double>(t_.values.size()), "triplets of T kept"}};
+  }
   LightCoeffs project_light(const Cubemap& radiance) const override;
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   std::unique_ptr<DeviceRelighter> upload(ClContext& context,

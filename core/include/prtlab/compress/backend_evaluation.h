@@ -52,7 +52,8 @@ struct BackendEvaluation {
 struct EvaluationOptions {
   int repeats = 20;                                   ///< relights timed (medians reported)
   std::map<std::string, std::string> device_options;  ///< the backend's device_params
-  /// Relights spent on the Frobenius error: exact when N / 3 fits, else Hutchinson's estimate.
+  /// Relights spent on the Frobenius error: exact when N / 3 fits, else Hutchinson's estimate;
+  /// 0 skips it (frobenius stays zero with relights = 0).
   int frobenius_relights = 64;
   std::uint64_t seed = 1;  ///< of the Frobenius estimate
 };

@@ -91,6 +91,14 @@ class DeviceRelighter {
   }
 };
 
+/// A quantity a backend measures of itself while compressing, which the harness records beside
+/// its own measurements of the point (docs/adding-a-compressor.md, "Backend metrics").
+struct BackendMetric {
+  std::string name;  ///< snake_case, unique within the backend: the key in result.json
+  double value = 0;
+  std::string meaning;  ///< what is measured, over what, in which units
+};
+
 /// declared_error_bound() of a backend that guarantees no bound.
 inline constexpr double kNoErrorBound = std::numeric_limits<double>::infinity();
 
@@ -119,6 +127,11 @@ class CompressedTransfer {
   /// suite can hold them to it: the measured error (transfer_error.h) must agree within 1e-3
   /// relative. Lossless results need not declare it (0 is checked from `lossless`).
   virtual std::optional<double> expected_frobenius_error() const { return std::nullopt; }
+  /// Named numbers the backend measured while compressing (the error of its own input signal,
+  /// which the harness's measurements against T cannot see); default none. They must survive
+  /// save and load. The harness writes them into every point's record (result.json
+  /// "backend_metrics", points.csv "backend_metrics", curves as "metrics.<name>").
+  virtual std::vector<BackendMetric> backend_metrics() const { return {}; }
   /// Basis of the LocalRadiance relight() produces.
   virtual RadianceBasis output_basis() const { return RadianceBasis::kPixel; }
 

@@ -12,7 +12,9 @@
 //               error a component removes per unit of storage: its m_c weights at relative
 //               cost w = adaptive_weight_cost and its own n values, the paper's storage model
 //               of section 4.1) under the budget sum_c (w m_c + n) k_c <= sum_c (w m_c + n) n',
-//               what the iterative result stores.
+//               what the iterative result stores (rule kStorage), or the paper's own rule of
+//               section 4.3 (kSloan): ranked by D_i^2 / m_c and granted in that order until
+//               sum_c m_c k_c, the per-point weights, would exceed m n' (adaptive_allocation()).
 //
 // What keeps it fast on T's rows (6,144 columns, ~50 non-zeros): no n x n covariance is ever
 // formed (truncated_pca.h works on the implicit centred operator, or C C^T for small clusters);
@@ -35,6 +37,18 @@
 namespace prt {
 
 enum class CpcaMethod { kStatic, kIterative, kAdaptive };
+
+/// How the adaptive method redistributes the components (adaptive_allocation()).
+enum class CpcaAdaptiveRule {
+  /// Rank by D_i^2 / (w m_c + n), the error removed per stored value (its m_c weights at
+  /// relative cost w and its own n values); grant in that order, skipping a component that does
+  /// not fit, while sum_c (w m_c + n) k_c stays within sum_c (w m_c + n) n'.
+  kStorage,
+  /// Sloan et al. 2003, section 4.3: rank by D_i^2 / m_c and add components in that order until
+  /// sum_c m_c k_c (the per-point weights) reaches its budget m n'; the first component that
+  /// would exceed it ends the allocation.
+  kSloan,
+};
 
 struct CpcaPass {
   std::string stage;   ///< "vq", "iterative", "adaptive", "final"
@@ -59,6 +73,11 @@ struct ClusteredPcaOptions {
   double adaptive_weight_cost = 1.0;
   /// Most components one cluster may get (adaptive); 0: 4 n' (at least 1), capped by cols.
   int adaptive_max_components = 0;
+  CpcaAdaptiveRule adaptive_rule = CpcaAdaptiveRule::kStorage;
+  /// Run every PCA update to pca_tolerance (the paper's "PCA of the cluster's current point
+  /// members" after each classification), not pca_iterations_per_pass warm-started subspace
+  /// iterations: the adaptive ranking then reads converged D_i^2.
+  bool converge_every_update = false;
   std::uint64_t seed = 0;
   /// Residual tolerance of each cluster's final PCA (truncated_pca.h; relative to its top
   /// eigenvalue).
@@ -111,6 +130,13 @@ struct ClusteredPca {
   /// sum_c (m_c + n) k_c, weights and vectors together, within that of the iterative result).
   std::uint64_t weight_count() const { return weights.size(); }
 };
+
+/// The adaptive method's redistribution: the component count of every cluster under `rule`,
+/// from each cluster's eigenvalues (D_i^2, decreasing; the candidates) and point count m_c, for
+/// `components` (n') per cluster on average, weights of relative cost `weight_cost` and
+/// components of `dim` values (both used by kStorage only). Clusters without points get 0.
+std::vector<int> adaptive_allocation(std::span<const CpcaCluster> clusters, int components,
+                                     CpcaAdaptiveRule rule, double weight_cost, std::size_t dim);
 
 /// Throws ParameterError when clusters is not in 1..points, components is negative or above the
 /// dimension, or an iteration count is negative.
