@@ -122,6 +122,50 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   return out;
 }
 
+/// The K x n_t coefficients Psi X_x of every vertex's folded rows, without the M-row tensor: the
+/// projection is linear, so folding the right-hand sides first (B_x Psi^T) and solving for K
+/// instead of M columns a vertex gives the same coefficients at a K / M share of the solve.
+std::vector<float> project_folded(const TransferMatrix& t, const SrbfProjector& p,
+                                  const Eigen::MatrixXd& psi, Progress& progress,
+                                  std::int64_t budget) {
+  const auto n = static_cast<Eigen::Index>(p.basis().size());
+  const Eigen::MatrixXd wt = p.pixel_weights().transpose();  // n_t x N: b's columns
+  const auto m = static_cast<std::size_t>(t.local_count());
+  const Eigen::Index k = psi.rows();
+  const Eigen::MatrixXd psi_t = psi.transpose();  // M x K
+  std::vector<float> out(t.vertex_count() * static_cast<std::size_t>(k * n));
+  const std::size_t per_block = std::max<std::size_t>(1, 1024 / m);
+  const std::size_t blocks = (t.vertex_count() + per_block - 1) / per_block;
+  std::atomic<std::size_t> done{0};
+  std::int64_t reported = 0;
+  std::mutex progress_mutex;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& r) {
+    for (std::size_t blk = r.begin(); blk != r.end(); ++blk) {
+      const std::size_t x0 = blk * per_block, x1 = std::min(t.vertex_count(), x0 + per_block);
+      Eigen::MatrixXd bf(n, static_cast<Eigen::Index>((x1 - x0) * static_cast<std::size_t>(k)));
+      Eigen::MatrixXd b(n, static_cast<Eigen::Index>(m));
+      for (std::size_t x = x0; x < x1; ++x) {
+        b.setZero();
+        for (std::size_t j = 0; j < m; ++j)
+          for (std::uint32_t e = t.row_offsets()[x * m + j]; e < t.row_offsets()[x * m + j + 1];
+               ++e)
+            b.col(static_cast<Eigen::Index>(j)) +=
+                static_cast<double>(t.value(e)) * wt.col(t.column(e));
+        bf.middleCols(static_cast<Eigen::Index>(x - x0) * k, k).noalias() = b * psi_t;
+      }
+      const Eigen::MatrixXd c = p.solve(bf);  // n_t x (vertices K)
+      Eigen::Map<MatF>(out.data() + x0 * static_cast<std::size_t>(k * n), c.cols(), n) =
+          c.transpose().cast<float>();
+      const std::size_t now = ++done;
+      std::lock_guard lock(progress_mutex);
+      const auto target = static_cast<std::int64_t>(budget * now / blocks);
+      progress.advance(target - reported);
+      reported = target;
+    }
+  });
+  return out;
+}
+
 float encode_value(float v, Precision p, const char* what) {
   if (p == Precision::kFloat32) return v;
   if (!(std::abs(v) <= 65504.0f))
@@ -231,23 +275,6 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const SrbfP
   return t_sq > 0 ? std::sqrt(std::max(0.0, approx + t_sq) / t_sq) : 0.0;
 }
 
-/// Psi X_x for every vertex: the M x n_t SRBF coefficients of T's rows folded into the K x n_t
-/// coefficients of the BRDF-weighted signal (the projection is linear, so this is the projection
-/// of the folded rows Psi T_x).
-std::vector<float> fold_coefficients(std::span<const float> c, std::size_t vertices, int m, int nt,
-                                     const Eigen::MatrixXd& psi) {
-  const auto k = static_cast<std::size_t>(psi.rows());
-  const std::size_t in = static_cast<std::size_t>(m) * nt, out_size = k * nt;
-  std::vector<float> out(vertices * out_size);
-  const MatF pf = psi.cast<float>();
-  tbb::parallel_for(std::size_t{0}, vertices, [&](std::size_t x) {
-    const Eigen::Map<const MatF> src(c.data() + x * in, m, nt);
-    Eigen::Map<MatF> dst(out.data() + x * out_size, static_cast<Eigen::Index>(k), nt);
-    dst.noalias() = pf * src;
-  });
-  return out;
-}
-
 /// ||Y - Psi T||_F / ||Psi T||_F in the pixel basis, Y_x (K x n_t SRBF coefficients, from
 /// `approx`) the approximation of vertex x's folded rows: per vertex ||G Y_x^T||^2 =
 /// sum((Y_x P) .* Y_x), and <G Y_x^T, Psi T_x> = <(Psi^T Y_x) G^T, T_x> over T's stored entries.
@@ -330,21 +357,27 @@ class SrbfCtaCompressor final : public Compressor {
                                        projector->alpha(), projector->condition_number())
                          : std::string("solved without a ridge (ridge = 0): the projection "
                                        "amplifies rounding errors"));
-    Projection proj = project_rows(t, *projector, input.cubemap, progress, projection_budget);
-    log_debug(
-        "{}: {} rows onto {} SRBFs (lambda {:.4g}, Gram condition {:.3g}, ridge alpha "
-        "{:.3g}) in {:.2f} s; SRBF alone: relative Frobenius error {:.4f}",
-        kName, t.rows(), p_.srbfs, bandwidth, projector->gram_condition_number(),
-        projector->alpha(), proj.seconds, proj.frobenius_error);
     // The BRDF signal: the paper's K view terms, Psi X_x, replace the M cells in the view mode.
     std::optional<BrdfFold> fold;
+    if (p_.signal == Signal::kBrdf) fold = fold_brdf(input.grid, p_.brdf, p_.brdf_terms);
+    Projection proj;
     std::vector<float> folded;
+    if (fold) {
+      const auto t1 = Clock::now();
+      folded = project_folded(t, *projector, fold->light, progress, projection_budget);
+      proj.seconds = std::chrono::duration<double>(Clock::now() - t1).count();
+    } else {
+      proj = project_rows(t, *projector, input.cubemap, progress, projection_budget);
+    }
+    log_debug(
+        "{}: {} {} onto {} SRBFs (lambda {:.4g}, Gram condition {:.3g}, ridge alpha {:.3g}) in "
+        "{:.2f} s",
+        kName, fold ? t.vertex_count() * static_cast<std::size_t>(p_.brdf_terms) : t.rows(),
+        fold ? "folded rows" : "rows", p_.srbfs, bandwidth, projector->gram_condition_number(),
+        projector->alpha(), proj.seconds);
     double srbf_error = proj.frobenius_error;
-    if (p_.signal == Signal::kBrdf) {
-      fold = fold_brdf(input.grid, p_.brdf, p_.brdf_terms);
-      folded = fold_coefficients(proj.coefficients, t.vertex_count(), t.local_count(), p_.srbfs,
-                                 fold->light);
-      proj.coefficients = {};  // the M-cell tensor is not needed past the fold
+    if (fold) {
+      const auto t1 = Clock::now();
       const std::size_t per_vertex = static_cast<std::size_t>(p_.brdf_terms) * p_.srbfs;
       srbf_error = folded_error(
           t, *projector, input.cubemap, *fold, [&](std::size_t x, RowMajorMatrixXd& y) {
@@ -354,9 +387,11 @@ class SrbfCtaCompressor final : public Compressor {
       log_info(
           "{}: BRDF-weighted signal: Cook-Torrance kd {}, m {}, F0 {} in {} terms (the truncation "
           "drops {:.3g} of the weighted kernel's squared singular values); SRBF alone: relative "
-          "Frobenius error {:.4f} (SE ratio {:.3f} %) against the {}-term signal",
+          "Frobenius error {:.4f} (SE ratio {:.3f} %) against the {}-term signal (measured in "
+          "{:.1f} s)",
           kName, p_.brdf.diffuse, p_.brdf.roughness, p_.brdf.fresnel0, p_.brdf_terms,
-          fold->dropped_fraction(), srbf_error, 100.0 * srbf_error * srbf_error, p_.brdf_terms);
+          fold->dropped_fraction(), srbf_error, 100.0 * srbf_error * srbf_error, p_.brdf_terms,
+          std::chrono::duration<double>(Clock::now() - t1).count());
     }
     CtaOptions o = p_.cta;
     const std::int64_t passes = 2 + o.clustering_iterations + o.approximation_iterations;
