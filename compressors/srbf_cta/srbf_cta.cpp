@@ -11,8 +11,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <mutex>
+#include <optional>
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
@@ -20,6 +22,7 @@
 #include "prtlab/lighting/srbf_light.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/sphere/icosphere.h"
+#include "prtlab/transfer/brdf_weighted_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "srbf_cta/clustered_tensor.h"
 
@@ -40,6 +43,9 @@ struct Params {
   LightMode light = LightMode::kUniform;
   int light_srbfs = 0;
   int light_rounds = 40;
+  Signal signal = Signal::kCells;
+  int brdf_terms = 16;
+  CookTorrance brdf;
 };
 
 /// G (N x n_t, no solid angle): t~(d_k) = (G c)_k.
@@ -116,6 +122,50 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   return out;
 }
 
+/// The K x n_t coefficients Psi X_x of every vertex's folded rows, without the M-row tensor: the
+/// projection is linear, so folding the right-hand sides first (B_x Psi^T) and solving for K
+/// instead of M columns a vertex gives the same coefficients at a K / M share of the solve.
+std::vector<float> project_folded(const TransferMatrix& t, const SrbfProjector& p,
+                                  const Eigen::MatrixXd& psi, Progress& progress,
+                                  std::int64_t budget) {
+  const auto n = static_cast<Eigen::Index>(p.basis().size());
+  const Eigen::MatrixXd wt = p.pixel_weights().transpose();  // n_t x N: b's columns
+  const auto m = static_cast<std::size_t>(t.local_count());
+  const Eigen::Index k = psi.rows();
+  const Eigen::MatrixXd psi_t = psi.transpose();  // M x K
+  std::vector<float> out(t.vertex_count() * static_cast<std::size_t>(k * n));
+  const std::size_t per_block = std::max<std::size_t>(1, 1024 / m);
+  const std::size_t blocks = (t.vertex_count() + per_block - 1) / per_block;
+  std::atomic<std::size_t> done{0};
+  std::int64_t reported = 0;
+  std::mutex progress_mutex;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& r) {
+    for (std::size_t blk = r.begin(); blk != r.end(); ++blk) {
+      const std::size_t x0 = blk * per_block, x1 = std::min(t.vertex_count(), x0 + per_block);
+      Eigen::MatrixXd bf(n, static_cast<Eigen::Index>((x1 - x0) * static_cast<std::size_t>(k)));
+      Eigen::MatrixXd b(n, static_cast<Eigen::Index>(m));
+      for (std::size_t x = x0; x < x1; ++x) {
+        b.setZero();
+        for (std::size_t j = 0; j < m; ++j)
+          for (std::uint32_t e = t.row_offsets()[x * m + j]; e < t.row_offsets()[x * m + j + 1];
+               ++e)
+            b.col(static_cast<Eigen::Index>(j)) +=
+                static_cast<double>(t.value(e)) * wt.col(t.column(e));
+        bf.middleCols(static_cast<Eigen::Index>(x - x0) * k, k).noalias() = b * psi_t;
+      }
+      const Eigen::MatrixXd c = p.solve(bf);  // n_t x (vertices K)
+      Eigen::Map<MatF>(out.data() + x0 * static_cast<std::size_t>(k * n), c.cols(), n) =
+          c.transpose().cast<float>();
+      const std::size_t now = ++done;
+      std::lock_guard lock(progress_mutex);
+      const auto target = static_cast<std::int64_t>(budget * now / blocks);
+      progress.advance(target - reported);
+      reported = target;
+    }
+  });
+  return out;
+}
+
 float encode_value(float v, Precision p, const char* what) {
   if (p == Precision::kFloat32) return v;
   if (!(std::abs(v) <= 65504.0f))
@@ -125,8 +175,9 @@ float encode_value(float v, Precision p, const char* what) {
   return half_to_float(float_to_half(v));
 }
 
-SrbfCtaArrays encode(const CtaModel& m, const Params& p, const TransferMatrix& t,
-                     double bandwidth) {
+/// `view`: the stored view basis (M x R1): the model's U for cells, Phi U for the BRDF signal.
+SrbfCtaArrays encode(const CtaModel& m, const Eigen::MatrixXd& view, const Params& p,
+                     const TransferMatrix& t, double bandwidth) {
   SrbfCtaArrays a;
   a.vertices = t.vertex_count();
   a.local_count = t.local_count();
@@ -141,6 +192,8 @@ SrbfCtaArrays encode(const CtaModel& m, const Params& p, const TransferMatrix& t
   a.light = p.light;
   a.light_srbfs = p.light_srbfs;
   a.light_rounds = p.light_rounds;
+  a.signal = p.signal;
+  a.brdf_terms = p.signal == Signal::kBrdf ? p.brdf_terms : 0;
   const auto r1 = static_cast<std::size_t>(m.rank_view),
              r2 = static_cast<std::size_t>(m.rank_light),
              r3 = static_cast<std::size_t>(m.rank_vertex), nt = m.light,
@@ -152,7 +205,7 @@ SrbfCtaArrays encode(const CtaModel& m, const Params& p, const TransferMatrix& t
   for (std::size_t i = 0; i < mm; ++i)
     for (std::size_t j = 0; j < r1; ++j)
       a.view_basis[i * r1 + j] =
-          q(m.view_basis(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)), "basis");
+          q(view(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)), "basis");
   const std::size_t clusters = m.clusters.size();
   a.light_bases.assign(clusters * nt * r2, 0.0f);
   a.duals.assign(clusters * r3 * r1 * r2, 0.0f);
@@ -221,6 +274,59 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen
   return t_sq > 0 ? std::sqrt(std::max(0.0, approx + t_sq) / t_sq) : 0.0;
 }
 
+/// ||Y - Psi T||_F / ||Psi T||_F in the pixel basis, Y_x (K x n_t SRBF coefficients, from
+/// `approx`) the approximation of vertex x's folded rows: per vertex ||G Y_x^T||^2 =
+/// sum((Y_x P) .* Y_x), and <G Y_x^T, Psi T_x> = <(Psi^T Y_x) G^T, T_x> over T's stored entries.
+double folded_error(const TransferMatrix& t, const SrbfProjector& p, const CubemapLayout& layout,
+                    const BrdfFold& fold,
+                    const std::function<void(std::size_t, RowMajorMatrixXd&)>& approx) {
+  const Eigen::MatrixXd g = pixel_values(p, layout);
+  const Eigen::MatrixXd gt = g.transpose();
+  const Eigen::MatrixXd pm = g.transpose() * g;
+  const auto nt = static_cast<Eigen::Index>(p.basis().size());
+  const auto mm = static_cast<std::size_t>(t.local_count());
+  const Eigen::MatrixXd psi_t = fold.light.transpose();
+  const double approx_sq = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, t.vertex_count(), 8), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+        RowMajorMatrixXd y;
+        for (std::size_t x = r.begin(); x != r.end(); ++x) {
+          approx(x, y);
+          acc += ((y * pm).array() * y.array()).sum();
+          const MatF rows = (psi_t * y).cast<float>();  // M x n_t
+          for (std::size_t j = 0; j < mm; ++j)
+            acc -= 2.0 *
+                   row_cross(t, x * mm + j, gt, rows.row(static_cast<Eigen::Index>(j)).data(), nt);
+        }
+        return acc;
+      },
+      std::plus<>());
+  const double t_sq = folded_squared_norm(t, fold);
+  return t_sq > 0 ? std::sqrt(std::max(0.0, approx_sq + t_sq) / t_sq) : 0.0;
+}
+
+/// The stored model's error against the folded transfer, from the decoded light bases, duals and
+/// weights and the term-space view basis `u` (K x R1, rounded like the stored values).
+double folded_stored_error(const SrbfCtaArrays& a, const Eigen::MatrixXd& u,
+                           const TransferMatrix& t, const SrbfProjector& p,
+                           const CubemapLayout& layout, const BrdfFold& fold) {
+  const auto r1 = a.rank_view, r2 = a.rank_light, r3 = a.rank_vertex, nt = a.srbf_count;
+  std::vector<Eigen::MatrixXd> uc(a.clusters());
+  for (std::size_t c = 0; c < uc.size(); ++c)
+    uc[c] =
+        Eigen::Map<const MatF>(a.light_bases.data() + c * static_cast<std::size_t>(nt) * r2, nt, r2)
+            .cast<double>();
+  return folded_error(t, p, layout, fold, [&](std::size_t x, RowMajorMatrixXd& y) {
+    const std::size_t c = a.ids[x];
+    const Eigen::Map<const MatF> v(a.duals.data() + c * static_cast<std::size_t>(r3) * r1 * r2, r3,
+                                   r1 * r2);
+    const Eigen::Map<const Eigen::RowVectorXf> w(a.weights.data() + x * r3, r3);
+    const Eigen::RowVectorXd kv = w.cast<double>() * v.cast<double>();
+    const Eigen::Map<const RowMajorMatrixXd> k(kv.data(), r1, r2);
+    y = u * k * uc[c].transpose();
+  });
+}
+
 class SrbfCtaCompressor final : public Compressor {
  public:
   explicit SrbfCtaCompressor(Params p) : p_(std::move(p)) {}
@@ -250,12 +356,42 @@ class SrbfCtaCompressor final : public Compressor {
                                        projector->alpha(), projector->condition_number())
                          : std::string("solved without a ridge (ridge = 0): the projection "
                                        "amplifies rounding errors"));
-    const Projection proj = project_rows(t, *projector, input.cubemap, progress, projection_budget);
+    // The BRDF signal: the paper's K view terms, Psi X_x, replace the M cells in the view mode.
+    std::optional<BrdfFold> fold;
+    if (p_.signal == Signal::kBrdf) fold = fold_brdf(input.grid, p_.brdf, p_.brdf_terms);
+    Projection proj;
+    std::vector<float> folded;
+    if (fold) {
+      const auto t1 = Clock::now();
+      folded = project_folded(t, *projector, fold->light, progress, projection_budget);
+      proj.seconds = std::chrono::duration<double>(Clock::now() - t1).count();
+    } else {
+      proj = project_rows(t, *projector, input.cubemap, progress, projection_budget);
+    }
     log_debug(
-        "{}: {} rows onto {} SRBFs (lambda {:.4g}, Gram condition {:.3g}, ridge alpha "
-        "{:.3g}) in {:.2f} s; SRBF alone: relative Frobenius error {:.4f}",
-        kName, t.rows(), p_.srbfs, bandwidth, projector->gram_condition_number(),
-        projector->alpha(), proj.seconds, proj.frobenius_error);
+        "{}: {} {} onto {} SRBFs (lambda {:.4g}, Gram condition {:.3g}, ridge alpha {:.3g}) in "
+        "{:.2f} s",
+        kName, fold ? t.vertex_count() * static_cast<std::size_t>(p_.brdf_terms) : t.rows(),
+        fold ? "folded rows" : "rows", p_.srbfs, bandwidth, projector->gram_condition_number(),
+        projector->alpha(), proj.seconds);
+    double srbf_error = proj.frobenius_error;
+    if (fold) {
+      const auto t1 = Clock::now();
+      const std::size_t per_vertex = static_cast<std::size_t>(p_.brdf_terms) * p_.srbfs;
+      srbf_error = folded_error(
+          t, *projector, input.cubemap, *fold, [&](std::size_t x, RowMajorMatrixXd& y) {
+            y = Eigen::Map<const MatF>(folded.data() + x * per_vertex, p_.brdf_terms, p_.srbfs)
+                    .cast<double>();
+          });
+      log_info(
+          "{}: BRDF-weighted signal: Cook-Torrance kd {}, m {}, F0 {} in {} terms (the truncation "
+          "drops {:.3g} of the weighted kernel's squared singular values); SRBF alone: relative "
+          "Frobenius error {:.4f} (SE ratio {:.3f} %) against the {}-term signal (measured in "
+          "{:.1f} s)",
+          kName, p_.brdf.diffuse, p_.brdf.roughness, p_.brdf.fresnel0, p_.brdf_terms,
+          fold->dropped_fraction(), srbf_error, 100.0 * srbf_error * srbf_error, p_.brdf_terms,
+          std::chrono::duration<double>(Clock::now() - t1).count());
+    }
     CtaOptions o = p_.cta;
     const std::int64_t passes = 2 + o.clustering_iterations + o.approximation_iterations;
     std::int64_t done = 0, reported = 0;
@@ -267,24 +403,43 @@ class SrbfCtaCompressor final : public Compressor {
       progress.advance(target - reported);
       reported = target;
     };
-    const TensorView view{proj.coefficients, t.vertex_count(),
+    const TensorView view =
+        fold ? TensorView{folded, t.vertex_count(), static_cast<std::size_t>(p_.brdf_terms),
+                          static_cast<std::size_t>(p_.srbfs)}
+             : TensorView{proj.coefficients, t.vertex_count(),
                           static_cast<std::size_t>(t.local_count()),
                           static_cast<std::size_t>(p_.srbfs)};
     const CtaModel model = clustered_tensor_approximation(view, o);
-    SrbfCtaArrays a = encode(model, p_, t, bandwidth);
-    a.srbf_frobenius_error = proj.frobenius_error;
+    SrbfCtaArrays a =
+        encode(model, fold ? Eigen::MatrixXd(fold->view * model.view_basis) : model.view_basis, p_,
+               t, bandwidth);
+    a.srbf_frobenius_error = srbf_error;
     const auto t0 = Clock::now();
+    if (fold) {
+      const auto q = [&](double v) {
+        return static_cast<double>(encode_value(static_cast<float>(v), p_.precision, "basis"));
+      };
+      a.frobenius_error = folded_stored_error(a, model.view_basis.unaryExpr(q), t, *projector,
+                                              input.cubemap, *fold);
+    }
     auto out = std::make_unique<SrbfCtaTransfer>(std::move(a), projector);
-    out->declare_model_error(t);
+    // Against T, the stored model is read through its own light step (light_operator()); the
+    // BRDF signal's reference is the folded transfer instead, set above.
+    if (!fold) out->declare_model_error(t);
+    const SrbfCtaArrays& stored = out->arrays();
     log_info(
         "{}: {} clusters, ranks ({}, {}, {}); projection {:.1f} s, CTA initialisation {:.1f} s, "
         "clustering {:.1f} s ({} iterations), approximation {:.1f} s ({} iterations), error "
-        "{:.1f} s; relative Frobenius error: SRBF {:.4f}, SRBF + CTA {:.4f}",
-        kName, model.clusters.size(), out->arrays().rank_view, out->arrays().rank_light,
-        out->arrays().rank_vertex, proj.seconds, model.times.initialisation, model.times.clustering,
+        "{:.1f} s; relative Frobenius error: SRBF {:.4f}, SRBF + CTA {:.4f} (SE ratios {:.3f} % "
+        "and {:.3f} %, {})",
+        kName, model.clusters.size(), stored.rank_view, stored.rank_light, stored.rank_vertex,
+        proj.seconds, model.times.initialisation, model.times.clustering,
         model.clustering_iterations, model.times.approximation, model.approximation_iterations,
-        std::chrono::duration<double>(Clock::now() - t0).count(),
-        out->arrays().srbf_frobenius_error, out->arrays().frobenius_error);
+        std::chrono::duration<double>(Clock::now() - t0).count(), stored.srbf_frobenius_error,
+        stored.frobenius_error, 100.0 * stored.srbf_frobenius_error * stored.srbf_frobenius_error,
+        100.0 * stored.frobenius_error * stored.frobenius_error,
+        fold ? fmt::format("against the {}-term BRDF-weighted signal", p_.brdf_terms)
+             : std::string("against T"));
     progress.finish();
     return out;
   }
@@ -416,6 +571,42 @@ CompressorEntry registry_entry() {
        1000.0,
        {},
        "alternating L-BFGS-B rounds of the scattered fit"},
+      {"signal",
+       ParamType::kEnum,
+       "cells",
+       std::nullopt,
+       std::nullopt,
+       {"cells", "brdf"},
+       "the view mode: T's M local cells (relight: local radiance), or the paper's BRDF-weighted "
+       "transfer in brdf_terms Cook-Torrance terms (relight: outgoing radiance towards the cells)"},
+      {"brdf_terms",
+       ParamType::kInt,
+       "16",
+       1.0,
+       4096.0,
+       {},
+       "K, separable BRDF terms of the brdf signal (the paper: 16; at most M)"},
+      {"brdf_diffuse",
+       ParamType::kReal,
+       "0.3",
+       0.0,
+       1.0,
+       {},
+       "Cook-Torrance kd, the Lambertian share of the brdf signal's BRDF"},
+      {"brdf_roughness",
+       ParamType::kReal,
+       "0.3",
+       0.01,
+       10.0,
+       {},
+       "Cook-Torrance Beckmann roughness m of the brdf signal's BRDF"},
+      {"brdf_fresnel0",
+       ParamType::kReal,
+       "0.5",
+       0.0,
+       1.0,
+       {},
+       "Cook-Torrance Schlick F0 of the brdf signal's BRDF"},
   };
   // The light rank, not the vertex rank: the light mode has to hold a cluster's disjoint cell
   // patches, and it is what limits the error (results/srbf-cta/README.md, "Ranks").
@@ -445,10 +636,16 @@ CompressorEntry registry_entry() {
                                                {"pixel", LightMode::kPixel}});
     p.light_srbfs = static_cast<int>(ps.get_int("light_srbfs"));
     p.light_rounds = static_cast<int>(ps.get_int("light_rounds"));
+    p.signal = ps.get_enum<Signal>("signal", {{"cells", Signal::kCells}, {"brdf", Signal::kBrdf}});
+    p.brdf_terms = static_cast<int>(ps.get_int("brdf_terms"));
+    p.brdf.diffuse = ps.get_real("brdf_diffuse");
+    p.brdf.roughness = ps.get_real("brdf_roughness");
+    p.brdf.fresnel0 = ps.get_real("brdf_fresnel0");
+    p.brdf.validate();
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;
-  e.version = 2;
+  e.version = 3;
   e.published = {
       {"bunny",
        {{"srbfs", "642"},

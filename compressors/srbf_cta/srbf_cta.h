@@ -27,16 +27,22 @@
 namespace prt::srbf_cta {
 
 inline constexpr std::string_view kName = "srbf_cta";
-inline constexpr int kStateVersion = 2;
+inline constexpr int kStateVersion = 3;
 
 enum class Precision { kFloat32, kFloat16 };
 /// How project_light computes L': the light fitted with uniform SRBFs (eq. 13's interpolation
 /// matrix), with scattered SRBFs (section 5.3's fit, then eq. 13), or the pixel quadrature of the
 /// inner products directly (the limit of a dense light basis).
 enum class LightMode { kUniform, kScattered, kPixel };
+/// What the tensor's view mode holds: T's M local cells (the relight is the local radiance L*),
+/// or the paper's K BRDF terms of the BRDF-weighted transfer (transfer/brdf_weighted_transfer.h;
+/// the relight is then the outgoing radiance B towards the M cells as view directions, with the
+/// view functions Phi folded into the stored view basis).
+enum class Signal { kCells, kBrdf };
 
 std::string_view to_string(Precision p);
 std::string_view to_string(LightMode m);
+std::string_view to_string(Signal s);
 
 /// The arrays both relight paths read (decoded floats), and what produced them.
 struct SrbfCtaArrays {
@@ -49,15 +55,19 @@ struct SrbfCtaArrays {
   int rank_view = 0, rank_light = 0, rank_vertex = 0;  ///< R1, R2, R3
   Precision precision = Precision::kFloat16;
   LightMode light = LightMode::kUniform;
-  int light_srbfs = 0;             ///< n_l (0: the transfer SRBFs)
-  int light_rounds = 40;           ///< of the scattered fit
-  std::vector<float> view_basis;   ///< M x R1
+  int light_srbfs = 0;    ///< n_l (0: the transfer SRBFs)
+  int light_rounds = 40;  ///< of the scattered fit
+  Signal signal = Signal::kCells;
+  int brdf_terms = 0;              ///< K of the BRDF-weighted signal (0 for cells)
+  std::vector<float> view_basis;   ///< M x R1 (for the BRDF signal: Phi U_view)
   std::vector<float> light_bases;  ///< clusters x n_t x R2
   std::vector<float> duals;        ///< clusters x R3 x (R1 R2), rows beyond a cluster's rank 0
   std::vector<std::uint32_t> ids;  ///< per vertex
   std::vector<float> weights;      ///< vertices x R3
   /// ||T~ - T||_F / ||T||_F of the stored model with its light step (light_operator()); of the
-  /// SRBF projection alone (before CTA, with the pixel quadrature).
+  /// SRBF projection alone (before CTA, with the pixel quadrature). For the BRDF signal the
+  /// reference is the folded transfer Psi T (K terms), equivalently its outgoing radiance F_K T
+  /// over the view cells (brdf_weighted_transfer.h).
   double frobenius_error = 0, srbf_frobenius_error = 0;
 
   std::size_t clusters() const {

@@ -33,6 +33,12 @@ LightMode light_from(std::string_view s) {
   throw ParameterError(fmt::format("light '{}' is none of uniform, scattered, pixel", s));
 }
 
+Signal signal_from(std::string_view s) {
+  for (Signal v : {Signal::kCells, Signal::kBrdf})
+    if (to_string(v) == s) return v;
+  throw ParameterError(fmt::format("signal '{}' is none of cells, brdf", s));
+}
+
 /// n_l of the uniform light basis.
 int uniform_light_count(const SrbfCtaArrays& a) {
   return a.light_srbfs == 0 ? a.srbf_count : a.light_srbfs;
@@ -62,6 +68,10 @@ std::string_view to_string(LightMode m) {
       return "pixel";
   }
   return "?";
+}
+
+std::string_view to_string(Signal s) {
+  return s == Signal::kCells ? "cells" : "brdf";
 }
 
 std::size_t SrbfCtaArrays::id_bytes() const {
@@ -255,6 +265,8 @@ void SrbfCtaTransfer::save(ArchiveWriter& w) const {
   w.add_meta("light", std::string(to_string(a_.light)));
   w.add_meta("light_srbfs", a_.light_srbfs);
   w.add_meta("light_rounds", a_.light_rounds);
+  w.add_meta("signal", std::string(to_string(a_.signal)));
+  w.add_meta("brdf_terms", a_.brdf_terms);
   w.add_meta("frobenius_error", a_.frobenius_error);
   w.add_meta("srbf_frobenius_error", a_.srbf_frobenius_error);
   add_values(w, "view_basis", a_.view_basis, a_.precision);
@@ -272,10 +284,11 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   if (version != kStateVersion)
     throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
                            kStateVersion,
-                           version == 1 ? " (version 1 declares the error of the pixel-quadrature "
-                                          "light step whatever the light mode; compress the "
-                                          "transfer again)"
-                                        : ""));
+                           version < kStateVersion
+                               ? " (older versions declare the error of the pixel-quadrature "
+                                 "light step whatever the light mode, or lack the signal; "
+                                 "compress the transfer again)"
+                               : ""));
   SrbfCtaArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.local_count = r.meta_value<int>("local_count");
@@ -289,11 +302,13 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   const auto clusters = r.meta_value<std::size_t>("clusters");
   a.light_srbfs = r.meta_value<int>("light_srbfs");
   a.light_rounds = r.meta_value<int>("light_rounds");
+  a.brdf_terms = r.meta_value<int>("brdf_terms");
   a.frobenius_error = r.meta_value<double>("frobenius_error");
   a.srbf_frobenius_error = r.meta_value<double>("srbf_frobenius_error");
   try {
     a.precision = precision_from(r.meta_value<std::string>("precision"));
     a.light = light_from(r.meta_value<std::string>("light"));
+    a.signal = signal_from(r.meta_value<std::string>("signal"));
     transfer_basis(a.srbf_count, 1.0);
   } catch (const ParameterError& e) {
     throw fail(e.what());
@@ -302,6 +317,9 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   if (a.local_count <= 0 || a.pixel_count <= 0 || 6 * res * res != a.pixel_count)
     throw fail(
         fmt::format("bad shape: M = {}, N = {} (N must be 6 R^2)", a.local_count, a.pixel_count));
+  if ((a.signal == Signal::kBrdf) != (a.brdf_terms > 0) || a.brdf_terms > a.local_count)
+    throw fail(fmt::format("{} BRDF terms for the {} signal of M = {} cells", a.brdf_terms,
+                           to_string(a.signal), a.local_count));
   if (a.rank_view < 1 || a.rank_view > a.local_count || a.rank_light < 1 ||
       a.rank_light > a.srbf_count || a.rank_vertex < 1 ||
       a.rank_vertex > a.rank_view * a.rank_light)

@@ -3,7 +3,9 @@
 // on one cluster, never raises its error and ends with every vertex in its best cluster; the
 // backend's stored errors against a dense recomputation, full-rank CTA is exactly the SRBF
 // projection, the pixel-quadrature relight equals the dense product T~ L, uniform light on the
-// transfer SRBFs equals it up to the ridge, save/load, and OpenCL against C++.
+// transfer SRBFs equals it up to the ridge, save/load, and OpenCL against C++; on the
+// BRDF-weighted signal, the stored errors against a dense recomputation from the folded transfer
+// and, at full rank, against an independent projection of the folded rows.
 #include "srbf_cta/srbf_cta.h"
 
 #include <gtest/gtest.h>
@@ -18,6 +20,7 @@
 #include "prtlab/compress/transfer_error.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/archive.h"
+#include "prtlab/transfer/brdf_weighted_transfer.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "srbf_cta/clustered_tensor.h"
@@ -428,6 +431,85 @@ TEST(SrbfCta, SaveLoadAndOpenClAgree) {
       n2 += std::pow(cpu.values[i][ch], 2);
     }
   EXPECT_LT(std::sqrt(se / n2), 1e-6);
+}
+
+// ---- the BRDF-weighted signal ------------------------------------------------------------------
+
+// 24 vertices, M = 9 (S = 3), N = 96: room for K = 4 BRDF terms below M.
+TransferMatrix brdf_test_transfer() {
+  return random_transfer(7, RandomTransferSpec{24, 3, 4, 4, 0.3, {3}});
+}
+
+// Phi Psi T_x for every vertex, stacked like T: the outgoing radiance towards the view cells of
+// the K-term signal, the reference of the brdf signal.
+Eigen::MatrixXd folded_reference(const TransferMatrix& t, const BrdfFold& fold) {
+  const int m = t.local_count();
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(t.rows()), static_cast<Eigen::Index>(t.cols()));
+  for (std::size_t x = 0; x < t.vertex_count(); ++x)
+    out.middleRows(static_cast<Eigen::Index>(x) * m, m) = fold.view * folded_vertex(t, fold, x);
+  return out;
+}
+
+TEST(SrbfCta, BrdfSignalStoredErrorsMatchADenseRecomputation) {
+  const TransferMatrix t = brdf_test_transfer();
+  const BrdfFold fold = fold_brdf(HemisphereGrid(3), CookTorrance{}, 4);
+  const Eigen::MatrixXd ref = folded_reference(t, fold);
+  for (const char* precision : {"float32", "float16"}) {
+    const auto ct = compress(t, {{"signal", "brdf"},
+                                 {"brdf_terms", "4"},
+                                 {"clusters", "3"},
+                                 {"rank_view", "2"},
+                                 {"rank_light", "6"},
+                                 {"rank_vertex", "3"},
+                                 {"precision", precision}});
+    const SrbfCtaArrays& a = arrays(*ct);
+    EXPECT_EQ(a.signal, Signal::kBrdf);
+    EXPECT_EQ(a.brdf_terms, 4);
+    // Phi is orthonormal under one weight on the equal-area cells, so the error over the view
+    // cells is the error in the K terms the backend measures.
+    const double direct = (reconstructed(a) - ref).norm() / ref.norm();
+    // float16 stores Phi U rounded, the backend measures with U rounded: close, not equal.
+    EXPECT_NEAR(a.frobenius_error, direct, std::string(precision) == "float32" ? 1e-5 : 1e-4)
+        << precision;
+    EXPECT_GT(a.frobenius_error, a.srbf_frobenius_error) << "CTA at low rank loses nothing?";
+  }
+}
+
+TEST(SrbfCta, BrdfSignalAtFullRankIsTheProjectionOfTheFoldedRows) {
+  const TransferMatrix t = brdf_test_transfer();
+  const auto ct = compress(t, {{"signal", "brdf"},
+                               {"brdf_terms", "4"},
+                               {"clusters", "1"},
+                               {"rank_light", "42"},
+                               {"rank_vertex", "24"},
+                               {"precision", "float32"}});
+  const SrbfCtaArrays& a = arrays(*ct);
+  EXPECT_NEAR(a.frobenius_error, a.srbf_frobenius_error, 1e-5);
+  // Independently: every folded row Psi T_x by regularised least squares.
+  const BrdfFold fold = fold_brdf(HemisphereGrid(3), CookTorrance{}, 4);
+  const SrbfProjector p(transfer_basis(42, a.bandwidth), CubemapLayout(4), a.ridge);
+  const Eigen::MatrixXd g = pixel_values(a);
+  double se = 0, n2 = 0;
+  for (std::size_t x = 0; x < t.vertex_count(); ++x) {
+    const Eigen::MatrixXd f = folded_vertex(t, fold, x);
+    for (Eigen::Index k = 0; k < f.rows(); ++k) {
+      std::vector<std::uint32_t> cols;
+      std::vector<double> vals;
+      for (Eigen::Index q = 0; q < f.cols(); ++q)
+        if (f(k, q) != 0) cols.push_back(static_cast<std::uint32_t>(q)), vals.push_back(f(k, q));
+      const Eigen::VectorXd c = p.project_sparse(cols, vals);
+      se += (g * c - f.row(k).transpose()).squaredNorm();
+      n2 += f.row(k).squaredNorm();
+    }
+  }
+  EXPECT_NEAR(a.srbf_frobenius_error, std::sqrt(se / n2), 1e-6);
+  // Saved and loaded, the model keeps its signal.
+  const prt::testing::TempDir dir;
+  save_compressed(*ct, dir.path() / "brdf.prt");
+  const auto back = load_compressed(dir.path() / "brdf.prt");
+  EXPECT_EQ(arrays(*back).signal, Signal::kBrdf);
+  EXPECT_EQ(arrays(*back).brdf_terms, 4);
+  EXPECT_THROW(compress(t, {{"signal", "brdf"}, {"brdf_terms", "10"}}), ParameterError);
 }
 
 }  // namespace
