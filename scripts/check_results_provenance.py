@@ -7,7 +7,8 @@ wrote it and the clean commit it was written at. This script checks every report
   * every folder holding result files is covered by a report: a README.md in it or in a folder
     above it (below results/; results/README.md is the index and covers nothing), and every
     file at the top of results/ by a report of the same stem (table1.csv by table1.md);
-  * every report (each *.md below results/ but the index) names a git commit that exists in
+  * every report (each README.md below results/, each *.md at its top, and each other *.md that
+    no README.md in or above its folder covers) names a git commit that exists in
     this repository's history ("git <hash>", "git: <hash>", "commit <hash>", or "this folder's
     commit") and a command (a line or code span that runs `prtlab`, a build/ binary, a
     `bench/` binary, a `scripts/` file, `python3`, `ctest` or `cmake`);
@@ -94,11 +95,16 @@ def find_problems(results: Path, repo: Path, use_git: bool) -> list[Problem]:
     for report in reports_under(results):
         text = report.read_text(errors="replace")
         hashes = list(dict.fromkeys(HASH.findall(text)))
-        if not hashes and not FOLDER_COMMIT.search(text):
+        # A table beside a README (tables.md) is that README's data: the README names the
+        # command and the commit. Any report is checked for a dirty tree.
+        own = report.name == "README.md" or report.parent == results or not covered(report.parent, results)
+        if not own:
+            pass
+        elif not hashes and not FOLDER_COMMIT.search(text):
             problems.append(Problem(rel(report), ": names no git commit (\"git <hash>\", \"commit <hash>\")"))
         elif hashes and use_git and not any(commit_exists(repo, h, known) for h in hashes):
             problems.append(Problem(rel(report), f": none of its commits ({', '.join(hashes)}) is in this repository's history"))
-        if not COMMAND.search(text):
+        if own and not COMMAND.search(text):
             problems.append(Problem(rel(report), ": names no command that wrote it"))
         for lineno, line in enumerate(text.splitlines(), 1):
             if DIRTY.search(line):

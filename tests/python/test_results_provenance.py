@@ -88,6 +88,19 @@ class ResultsProvenance(unittest.TestCase):
         self.assertIn("results/y/result.json: its provenance says the tree was dirty", out)
         self.assertIn("results/y/fit.json: its provenance says the tree was dirty", out)
 
+    def test_a_table_beside_a_readme_is_covered_by_it_but_not_when_dirty(self):
+        self.write("results/x/README.md", self.good_report())
+        self.write("results/x/tables.md", "| a | b |\n|---|---|\n| 1 | 2 |\n")
+        self.assertEqual(self.check()[0], 0)
+        self.write("results/y/tables.md", "| a | b |\n")
+        rc, out = self.check()
+        self.assertEqual(rc, 1)
+        self.assertIn("results/y/tables.md: names no git commit", out)
+        self.write("results/y/tables.md", self.good_report())
+        self.write("results/x/tables.md", f"git {self.sha} (dirty)\n")
+        rc, out = self.check()
+        self.assertIn("results/x/tables.md:1: written from a dirty tree", out)
+
     def test_a_top_level_file_needs_a_report_of_its_stem(self):
         self.write("results/table9.csv", "a\n")
         rc, out = self.check()
