@@ -769,6 +769,7 @@ CompressorEntry registry_entry() {
   e.size_knob = SizeKnob{"vectors", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 32.0,
                          SizeKnob::Scale::kLinear};
   e.lossless = false;
+  e.cost_hint_seconds = 65;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     CpcaShParams c;
     c.options.clusters = static_cast<int>(p.get_int("clusters"));

@@ -226,6 +226,7 @@ CompressorEntry registry_entry() {
   };
   // No size knob: `values` is an enum, and a knob must be an int or real parameter.
   e.lossless = true;  // at the default values=float32
+  e.cost_hint_seconds = 0.2;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     return std::make_unique<CsrQuantizedCompressor>(
         p.get_enum<ValueFormat>("values", {{"float32", ValueFormat::kFloat32},

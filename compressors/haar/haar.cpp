@@ -383,6 +383,7 @@ CompressorEntry registry_entry() {
   e.size_knob =
       SizeKnob{"k", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 512.0, SizeKnob::Scale::kLog};
   e.lossless = false;
+  e.cost_hint_seconds = 1.2;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     HaarOptions o;
     o.k = static_cast<int>(p.get_int("k"));

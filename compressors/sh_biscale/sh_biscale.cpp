@@ -247,6 +247,7 @@ CompressorEntry registry_entry() {
   e.size_knob = SizeKnob{"order", SizeKnob::Direction::kLargerIsMoreStorage, 1.0,
                          static_cast<double>(kInputOrder), SizeKnob::Scale::kLinear};
   e.lossless = false;
+  e.cost_hint_seconds = 0.04;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     ShBiscaleParams c;
     c.order = static_cast<int>(p.get_int("order"));

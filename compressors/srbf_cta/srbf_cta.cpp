@@ -613,6 +613,7 @@ CompressorEntry registry_entry() {
   e.size_knob = SizeKnob{"rank_light", SizeKnob::Direction::kLargerIsMoreStorage, 4.0, 320.0,
                          SizeKnob::Scale::kLinear};
   e.lossless = false;
+  e.cost_hint_seconds = 1600;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& ps) -> std::unique_ptr<Compressor> {
     Params p;
     p.srbfs = static_cast<int>(ps.get_int("srbfs"));
