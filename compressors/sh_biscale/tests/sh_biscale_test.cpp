@@ -327,8 +327,7 @@ TEST(ShBiscale, RelightIsTheShProjectionOfTLOnAShadowedScene) {
   // Error budget of the reference: the cell-mean rule errs by about h^2 / 12 |grad f| |grad y|
   // per cell (h ~ 0.05 rad at S = 32), and each pixel of T counts wholly in the cell of its
   // centre (about 12 pixels a cell at R = 64). The difference shrinks with S close to the h^2
-  // of the first term, so it is the reference's, not the backend's (relative_error records it;
-  // the backend README gives it at S = 16 and 32).
+  // of the first term, so it is the reference's, not the backend's (relative_error records it).
   constexpr double kTolerance = 0.005;
   const double err = (got - reference).norm() / reference.norm();
   RecordProperty("relative_error", std::to_string(err));
