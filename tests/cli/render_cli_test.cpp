@@ -180,7 +180,9 @@ TEST_F(RenderCli, FpsRelightsOnlyOnLightChangesAndWritesReports) {
                                 ? bytes / 6.0e9 * 1e3
                                 : std::max(bytes / 141.7e9, flops / 933.0e9) * 1e3;
     EXPECT_NEAR(gtx, expected, 1e-9 * expected) << c["stage"];
-    if (c["stage"] == "G-buffer upload") EXPECT_EQ(bytes, 44.0 * hits + 4.0 * pixels);
+    if (c["stage"] == "G-buffer upload") {
+      EXPECT_EQ(bytes, 44.0 * hits + 4.0 * pixels);
+    }
   }
   for (const char* s : {"view/G-buffer", "view/G-buffer upload", "view/view cache + shade hits",
                         "light/relight", "light/cached shade"})
