@@ -1,0 +1,11 @@
+#!/bin/bash
+# The runs of results/srbf-cta-paper (from the repository root).
+B=build/release/bench/srbf_cta_paper_bench
+R=results/srbf-cta-paper
+P="rank_view=8,rank_light=48,rank_vertex=24"
+$B bunny $R/bunny.json "srbf_cta:clusters=9,$P" "afcpca:clusters=9,rank_view=8,segments=24,components=12" \
+   "srbf_cta:clusters=9,$P,hooi_sweeps=4" "srbf_cta:clusters=9,$P,spread=1.5" "srbf_cta:clusters=9,$P,spread=0.5" > $R/bunny.log 2>&1
+$B bunny-12k $R/bunny-12k.json "srbf_cta:clusters=34,$P" > $R/bunny-12k.log 2>&1
+$B bunny $R/bunny-more.json "srbf_cta:clusters=9,$P,spread=0.75" "srbf_cta:clusters=9,rank_view=16,rank_light=48,rank_vertex=24" > $R/bunny-more.log 2>&1
+# A rougher BRDF (more energy in the leading view terms), with and without the view truncation.
+$B bunny $R/bunny-rough.json "srbf_cta:clusters=9,$P,brdf_roughness=0.6" "srbf_cta:clusters=9,rank_view=16,rank_light=48,rank_vertex=24,brdf_roughness=0.6" > $R/bunny-rough.log 2>&1
