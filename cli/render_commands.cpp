@@ -128,7 +128,8 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
   (void)ParamSet(o.backend, entry.params, assignments);
   p.device_options = ParamSet::parse_assignments(o.device_params, "--device-param");
   (void)CompressorRegistry::instance().device_options(o.backend, p.device_options);
-  const auto material_assignments = ParamSet::parse_assignments(o.material_params, "--material-param");
+  const auto material_assignments =
+      ParamSet::parse_assignments(o.material_params, "--material-param");
   const auto& material_entry = MaterialRegistry::instance().get(o.material);
   p.material_params = ParamSet(o.material, material_entry.params, material_assignments).canonical();
   p.desc = parse_scene(resolve_scene(o.scene));

@@ -549,12 +549,11 @@ std::unique_ptr<CompressedTransfer> CpcaShTransfer::load(const ArchiveReader& r)
   };
   const int version = r.meta_value<int>("cpca_sh_version");
   if (version != kStateVersion)
-    throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
-                           kStateVersion,
-                           version < kStateVersion
-                               ? " (older versions hold no local bin count, model error or "
-                                 "signal; compress the transfer again)"
-                               : ""));
+    throw fail(fmt::format(
+        "state version {} is not the version {} this build reads{}", version, kStateVersion,
+        version < kStateVersion ? " (older versions hold no local bin count, model error or "
+                                  "signal; compress the transfer again)"
+                                : ""));
   CpcaShArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.order = r.meta_value<int>("order");

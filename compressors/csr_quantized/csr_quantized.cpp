@@ -225,7 +225,7 @@ CompressorEntry registry_entry() {
        "even), u8 = code q in 0..255 times a per-row f32 scale max_row/255 (round to nearest)"},
   };
   // No size knob: `values` is an enum, and a knob must be an int or real parameter.
-  e.lossless = true;  // at the default values=float32
+  e.lossless = true;          // at the default values=float32
   e.cost_hint_seconds = 0.2;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
     return std::make_unique<CsrQuantizedCompressor>(

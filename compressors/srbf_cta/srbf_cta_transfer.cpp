@@ -282,13 +282,12 @@ std::unique_ptr<CompressedTransfer> SrbfCtaTransfer::load(const ArchiveReader& r
   };
   const int version = r.meta_value<int>("srbf_cta_version");
   if (version != kStateVersion)
-    throw fail(fmt::format("state version {} is not the version {} this build reads{}", version,
-                           kStateVersion,
-                           version < kStateVersion
-                               ? " (older versions declare the error of the pixel-quadrature "
-                                 "light step whatever the light mode, or lack the signal; "
-                                 "compress the transfer again)"
-                               : ""));
+    throw fail(fmt::format(
+        "state version {} is not the version {} this build reads{}", version, kStateVersion,
+        version < kStateVersion ? " (older versions declare the error of the pixel-quadrature "
+                                  "light step whatever the light mode, or lack the signal; "
+                                  "compress the transfer again)"
+                                : ""));
   SrbfCtaArrays a;
   a.vertices = r.meta_value<std::size_t>("vertices");
   a.local_count = r.meta_value<int>("local_count");

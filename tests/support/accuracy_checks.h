@@ -263,8 +263,8 @@ inline ::testing::AssertionResult frobenius_within_declaration(
     // |measured - model| <= ||T~_relit - T~_model||_F / ||T||_F (triangle inequality).
     if (!(std::abs(relative - model_error) <= (off / scale) * (1 + 1e-6) + 1e-12))
       return ::testing::AssertionFailure()
-             << "measured Frobenius error " << relative << " vs the stored model's "
-             << model_error << " (declared " << *expected << "): differ by more than the relit "
+             << "measured Frobenius error " << relative << " vs the stored model's " << model_error
+             << " (declared " << *expected << "): differ by more than the relit "
              << "columns' distance to the model, " << off / scale;
     return ::testing::AssertionSuccess() << "measured " << relative << ", declared " << *expected;
   }
