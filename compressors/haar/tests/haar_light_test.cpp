@@ -18,6 +18,7 @@
 #include "haar/haar.h"
 #include "haar/haar_columns.h"
 #include "haar/haar_wavelet.h"
+#include "haar/tests/stored_terms.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/numeric/float16.h"
@@ -31,35 +32,7 @@ namespace {
 
 const std::filesystem::path g_cache_root = prt::testing::use_private_cache("haar-light");
 
-using Params = std::map<std::string, std::string>;
-
-std::unique_ptr<CompressedTransfer> compress(const TransferMatrix& t, const Params& p) {
-  const CubemapLayout cubemap(static_cast<int>(std::lround(std::sqrt(t.cols() / 6.0))));
-  const HemisphereGrid grid(static_cast<int>(std::lround(std::sqrt(t.local_count()))));
-  return CompressorRegistry::instance()
-      .create(std::string(kName), p)
-      ->compress({t, nullptr, cubemap, grid}, Progress::null());
-}
-
-const HaarArrays& arrays(const CompressedTransfer& ct) {
-  return dynamic_cast<const HaarTransfer&>(ct).arrays();
-}
-
-double stored_value(const HaarArrays& a, std::size_t row, std::size_t i) {
-  switch (a.format) {
-    case ValueFormat::kFloat32:
-      return a.values32[i];
-    case ValueFormat::kFloat16:
-      return half_to_float(a.values16[i]);
-    case ValueFormat::kS8:
-      return a.codes[i] * static_cast<double>(a.row_scales[row]);
-  }
-  return 0;
-}
-
-std::uint32_t stored_index(const HaarArrays& a, std::size_t i) {
-  return a.wide ? a.indices32[i] : a.indices16[i];
-}
+using namespace prt::haar::test_support;  // compress, arrays, stored_value, stored_index, Params
 
 // A radiance cubemap with a smooth sky, a bright small sun and a dark floor: coefficients of
 // every level matter, and no two weighted scores tie.

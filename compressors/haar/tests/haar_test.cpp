@@ -19,6 +19,7 @@
 #endif
 
 #include "haar/haar_wavelet.h"
+#include "haar/tests/stored_terms.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/numeric/float16.h"
@@ -36,7 +37,7 @@ namespace fs = std::filesystem;
 
 const fs::path g_cache_root = prt::testing::use_private_cache("haar");
 
-using Params = std::map<std::string, std::string>;
+using namespace prt::haar::test_support;  // compress, arrays, stored_value, stored_index, Params
 
 std::vector<double> random_values(std::size_t n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -51,35 +52,6 @@ std::vector<double> random_values(std::size_t n, std::uint64_t seed) {
 TransferMatrix test_transfer(int resolution = 4, std::uint64_t seed = 3, double density = 0.5,
                              int supersampling = 2) {
   return random_transfer(seed, RandomTransferSpec{12, 2, resolution, supersampling, density, {5}});
-}
-
-std::unique_ptr<CompressedTransfer> compress(const TransferMatrix& t, const Params& p) {
-  const CubemapLayout cubemap(static_cast<int>(std::lround(std::sqrt(t.cols() / 6.0))));
-  const HemisphereGrid grid(static_cast<int>(std::lround(std::sqrt(t.local_count()))));
-  return CompressorRegistry::instance()
-      .create(std::string(kName), p)
-      ->compress({t, nullptr, cubemap, grid}, Progress::null());
-}
-
-const HaarArrays& arrays(const CompressedTransfer& ct) {
-  return dynamic_cast<const HaarTransfer&>(ct).arrays();
-}
-
-// Term i's stored value as the format defines it, in double.
-double stored_value(const HaarArrays& a, std::size_t row, std::size_t i) {
-  switch (a.format) {
-    case ValueFormat::kFloat32:
-      return a.values32[i];
-    case ValueFormat::kFloat16:
-      return half_to_float(a.values16[i]);
-    case ValueFormat::kS8:
-      return a.codes[i] * static_cast<double>(a.row_scales[row]);
-  }
-  return 0;
-}
-
-std::uint32_t stored_index(const HaarArrays& a, std::size_t i) {
-  return a.wide ? a.indices32[i] : a.indices16[i];
 }
 
 // Row `row` of T~ in the pixel basis, by the inverse transform of its stored terms.
