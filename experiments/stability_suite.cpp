@@ -32,6 +32,8 @@
 #include "prtlab/geometry/procedural_shapes.h"
 #include "prtlab/image/image_io.h"
 #include "prtlab/lighting/environment_map.h"
+#include "prtlab/lighting/srbf_light.h"
+#include "prtlab/render/image_error.h"
 #include "prtlab/storage/atomic_file.h"
 #include "prtlab/storage/data_paths.h"
 #include "prtlab/storage/stage_cache.h"
@@ -301,6 +303,7 @@ class Suite {
         {"hemisphere-projection", &Suite::hemisphere_projection},
         {"btf-nan-inf", &Suite::btf_nan},
         {"btf-extreme-values", &Suite::btf_extreme},
+        {"zero-reference", &Suite::zero_reference},
     };
     return c;
   }
@@ -603,6 +606,65 @@ class Suite {
     }
   }
 
+  // Every relative error against a reference that is zero: 0 / 0 is no perfect score, so a
+  // finite relative error reported without the "zero-reference" warning is a silent row. The
+  // row's error is the absolute one, which stays defined.
+  static Measured against_zero(double relative, double absolute, const std::string& what) {
+    return {absolute,
+            std::isnan(relative)
+                ? fmt::format("{}: relative error undefined, absolute {:.3e}", what, absolute)
+                : fmt::format("{}: relative error {:.3e} against a zero reference", what, relative),
+            true};
+  }
+
+  void zero_reference() {
+    const Cubemap black(resolution());
+    for (const auto& b : spec_.backends) {
+      const CompressedTransfer* ct = compressed(b, "zero-reference");
+      if (!ct) continue;
+      add(run_row("zero-reference", b, [&] {
+        LocalRadiance out;
+        ct->relight(ct->project_light(black), out);
+        const LocalRadiance pixel = to_pixel_basis(out, scene().grid);
+        const LocalRadiance ref = exact_reference(scene().transfer.result.transfer, black);
+        // Also holds a lossless backend to exact zeros (a NumericalError otherwise).
+        check_within_declared_bound(*ct, pixel, ref, "black");
+        double abs2 = 0;
+        for (const Rgb& v : pixel.values)
+          abs2 += static_cast<double>(v.x) * v.x + static_cast<double>(v.y) * v.y +
+                  static_cast<double>(v.z) * v.z;
+        return against_zero(relative_l2_error(pixel, ref), std::sqrt(abs2),
+                            "relight of a black light");
+      }));
+    }
+    add(run_row("zero-reference", "image error against a black image", [&] {
+      RgbImage image(8, 8), reference(8, 8);
+      for (Rgb& p : image.pixels) p = Rgb(0.25f);
+      const ImageError e = image_error(image, reference);
+      return against_zero(e.relative_l2, e.rmse, "image of 0.25 against black (rmse)");
+    }));
+    add(run_row("zero-reference", "SRBF light fit of a black map", [&] {
+      ScatteredFitOptions o;
+      o.count = 4;
+      o.rounds = 1;
+      ScatteredFitReport report;
+      const SrbfLight fit = fit_scattered_srbf(black, o, &report);
+      return against_zero(report.error, 0.0, "SRBF fit");
+    }));
+    const auto clean = small_btf();
+    const auto dark = std::make_shared<const Btf>(clean->material(), clean->resolution(),
+                                                  clean->view_side(), clean->light_side(),
+                                                  std::vector<float>(clean->data().size(), 0.f));
+    for (const auto& name : spec_.materials) {
+      add(run_row("zero-reference", name + " on a black BTF", [&] {
+        const auto m =
+            MaterialRegistry::instance().create(name, {})->compress({dark}, Progress::null());
+        const MaterialError e = material_error(*m, *dark);
+        return against_zero(e.relative_l2, e.max_abs, "material error (largest absolute)");
+      }));
+    }
+  }
+
   const SuiteSpec& spec_;
   fs::path work_;
   bool progress_;
@@ -650,7 +712,7 @@ const std::vector<std::string>& stability_case_names() {
       "nan-inf-light",      "nan-inf-mesh",          "degenerate-triangles",
       "zero-visibility",    "cpca-clusters-below-n", "cpca-empty-clusters",
       "cpca-near-singular", "srbf-ill-conditioned",  "hemisphere-projection",
-      "btf-nan-inf",        "btf-extreme-values"};
+      "btf-nan-inf",        "btf-extreme-values",    "zero-reference"};
   return names;
 }
 

@@ -32,7 +32,9 @@ class RttCompressor final : public MaterialCompressor {
     if (!input.btf) throw ParameterError("material rtt: no BTF given");
     auto table = std::make_shared<const Btf>(project_btf(*input.btf, order_));
     RttMaterial probe(sampling_of(*input.btf), table, 0.0);
-    const double error = material_error(probe, *input.btf).relative_l2;
+    // A black BTF projects to exact zeros: no relative error exists, and none is lost.
+    const double measured = material_error(probe, *input.btf).relative_l2;
+    const double error = std::isnan(measured) ? 0.0 : measured;
     progress.finish();
     return std::make_unique<RttMaterial>(sampling_of(*input.btf), std::move(table), error);
   }

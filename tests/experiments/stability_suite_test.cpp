@@ -89,6 +89,39 @@ materials = ["full"]
   }
 }
 
+// Relative errors against a zero reference (a black light, a black image, a black map, a black
+// BTF) are undefined, said by the named warning: a finite relative error without it, as 0 / 0
+// once gave, would be a silent row.
+TEST_F(StabilitySuite, RelativeErrorsAgainstZeroAreWarnedNotPerfect) {
+  const fs::path file = write(R"(
+name = "stability"
+kind = "stability"
+scene = "tiny-sphere-plane"
+cases = ["zero-reference"]
+backends = ["uncompressed", "cpca"]
+materials = ["full", "packed"]
+)");
+  StabilityOptions o;
+  o.out_root = tmp_.path() / "results";
+  o.show_progress = false;
+  const nlohmann::json r = run_stability_suite(file, o);
+  for (const char* subject :
+       {"uncompressed", "cpca", "image error against a black image",
+        "SRBF light fit of a black map", "full on a black BTF", "packed on a black BTF"}) {
+    const nlohmann::json* row = find_row(r, "zero-reference", subject);
+    ASSERT_NE(row, nullptr) << subject;
+    EXPECT_EQ(row->at("outcome"), "warned") << row->dump();
+    EXPECT_GE(row->at("warnings").value("zero-reference", 0), 1) << row->dump();
+    EXPECT_NE(row->at("detail").get<std::string>().find("undefined"), std::string::npos)
+        << row->dump();
+  }
+  // Relit to exact zeros by the lossless backend; the image's absolute error is its 0.25.
+  EXPECT_EQ(find_row(r, "zero-reference", "uncompressed")->at("error").get<double>(), 0.0);
+  EXPECT_NEAR(
+      find_row(r, "zero-reference", "image error against a black image")->at("error").get<double>(),
+      0.25, 1e-6);
+}
+
 TEST_F(StabilitySuite, AnUnknownCaseIsRefusedNamingTheFile) {
   const fs::path file = write("name = \"s\"\nkind = \"stability\"\ncases = [\"nan-light\"]\n");
   try {

@@ -9,6 +9,9 @@
 //   archive        a transfer matrix with SH, one without, every element type, a compressed
 //   transfer_load  one compressed transfer per registered backend (default parameters)
 //   material_load  one compressed material per registered material backend
+//   experiment     the experiment files of the repository and the refusals of docs/robustness.md
+//                  (a grid past the point budget, a backend twice, a type error on a variant)
+//   ubo            FMF and BDI files from prtlab's writers and headers declaring 65536^2 texels
 //
 // Usage: prtlab-fuzz-seeds <output folder>
 #include <ImfChannelList.h>
@@ -21,6 +24,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -31,11 +35,12 @@
 #include <string_view>
 #include <vector>
 
+#include "experiment_spec.h"
 #include "prtlab/base/log.h"
-#include "support/sphere_over_plane.h"
 #include "prtlab/base/progress.h"
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
+#include "prtlab/btf/ubo_btf.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/geometry/mesh_io.h"
@@ -47,6 +52,7 @@
 #include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_io.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "support/sphere_over_plane.h"
 
 namespace {
 
@@ -269,6 +275,82 @@ void write_material_seeds(const fs::path& dir) {
     prt::save_material(*prt::compress_material(name, {}, btf), dir / fmt::format("{}.prt", name));
 }
 
+// ---- experiment files --------------------------------------------------------------------------
+
+void write_experiment_seeds(const fs::path& dir) {
+  int n = 0;
+  for (const fs::path& f : prt::experiments::experiment_files())
+    fs::copy_file(f, dir / fmt::format("{:02d}-{}", n++, f.filename().string()),
+                  fs::copy_options::overwrite_existing);
+  const std::string head =
+      "name = \"seed\"\nkind = \"sweep\"\nscenes = [\"tiny-sphere-plane\"]\n"
+      "environments = [\"sun:3e4\"]\n";
+  std::string wide;
+  for (int v = 1; v <= 50; ++v) wide += fmt::format("{}{}", v == 1 ? "" : ", ", v);
+  write_text(dir / "grid-past-budget.toml",
+             head + fmt::format("backends = [\"cpca\"]\n[grid.cpca]\nclusters = [{0}]\n"
+                                "vectors = [{0}]\n",
+                                wide));
+  write_text(dir / "backend-twice.toml", head + "backends = [\"cpca\", \"haar\", \"cpca\"]\n");
+  write_text(dir / "star-and-name.toml", head + "backends = [\"*\", \"cpca\"]\n");
+  write_text(dir / "points-and-grid.toml",
+             head +
+                 "backends = [\"cpca\"]\n[grid.cpca]\nclusters = [4]\n"
+                 "[[points.cpca]]\nclusters = 8\n");
+  write_text(dir / "variant-type-error.toml",
+             head + "backends = [\"cpca\"]\n[variant.quick]\nrepeats = \"three\"\n");
+  write_text(dir / "unknown-kind.toml",
+             "name = \"seed\"\nkind = \"tabel\"\nscenes = [\"tiny-sphere-plane\"]\n");
+}
+
+// ---- UBO measured BTFs
+// ---------------------------------------------------------------------------
+
+// A "!FMF06FC" / "!BDIF06R2!" header (ubo_btf.h) with one view and one light at the zenith,
+// declaring side x side texels and holding nothing after it.
+std::string ubo_header(std::string_view signature, std::uint32_t side) {
+  std::string b(signature);
+  const auto u32 = [&](std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) b.push_back(static_cast<char>((v >> (8 * k)) & 0xFF));
+  };
+  const auto f32 = [&](float v) {
+    std::uint32_t u;
+    std::memcpy(&u, &v, 4);
+    u32(u);
+  };
+  u32(4 + 4 + 240 + 4 + 12);  // meta data block: its size, version, 240 bytes, 4 floats
+  u32(1);
+  b.append(240, '\0');
+  f32(10.f);
+  for (int c = 0; c < 3; ++c) f32(1.f);
+  u32(1);  // one view at (0, 0) with one light at (0, 0)
+  f32(0.f);
+  f32(0.f);
+  u32(1);
+  f32(0.f);
+  f32(0.f);
+  u32(side);
+  u32(side);
+  return b;
+}
+
+void write_ubo_seeds(const fs::path& dir) {
+  prt::BtfParams p;
+  p.resolution = 4;
+  p.view_side = 2;
+  p.light_side = 2;
+  p.supersampling = 1;
+  p.geometry_grid = 32;
+  const prt::Btf btf = prt::generate_btf(prt::make_btf_material("checker", 32), p);
+  prt::write_ubo_fmf(btf, dir / "exact.btf");
+  prt::write_ubo_fmf(btf, dir / "rank1-half.btf", {.components = 1, .scalar_bytes = 2});
+  prt::write_ubo_bdi(btf, dir / "sparse.btf");
+  for (const std::string_view signature : {"!FMF06FC", "!BDIF06R2!"})
+    for (const std::uint32_t side : {65536u, 16384u})
+      write_text(dir / fmt::format("{}-{}.btf", signature.substr(1, 3), side),
+                 ubo_header(signature, side));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -291,6 +373,8 @@ int main(int argc, char** argv) {
     write_scene_seeds(folder("scene"), PRTLAB_SOURCE_DIR);
     write_archive_seeds(folder("archive"), folder("transfer_load"));
     write_material_seeds(folder("material_load"));
+    write_experiment_seeds(folder("experiment"));
+    write_ubo_seeds(folder("ubo"));
   } catch (const std::exception& e) {
     std::cerr << "prtlab-fuzz-seeds: " << e.what() << "\n";
     return 1;

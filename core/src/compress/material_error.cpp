@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "prtlab/base/error.h"
+#include "prtlab/base/relative_error.h"
 
 namespace prt {
 
@@ -47,7 +48,8 @@ MaterialError material_error(const CompressedMaterial& material, const Btf& full
   }
   MaterialError e;
   e.reference_l2 = std::sqrt(sum.ref2);
-  e.relative_l2 = e.reference_l2 > 0 ? std::sqrt(sum.diff2) / e.reference_l2 : std::sqrt(sum.diff2);
+  e.relative_l2 = relative_to(std::sqrt(sum.diff2), e.reference_l2,
+                              "relative L2 error of material '" + material.backend() + "'");
   e.max_abs = sum.max_abs;
   e.samples = static_cast<std::uint64_t>(full.value_count());
   return e;
