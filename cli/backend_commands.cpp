@@ -8,6 +8,7 @@
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/opencl/cl_device.h"
@@ -30,6 +31,7 @@ struct CompressCli {
   std::string backend;
   std::vector<std::string> params;
   std::vector<std::string> device_params;
+  std::vector<std::string> light_params;
   bool json = false;
   bool force = false;
   int lights = 8;
@@ -50,12 +52,16 @@ nlohmann::json material_json(const MaterialEntry& e) {
           {"origin", e.origin}, {"parameters", params},         {"device_parameters", device}};
 }
 
-void print_params(const std::vector<ParamSpec>& params, const std::vector<ParamSpec>& device) {
+void print_params(const std::vector<ParamSpec>& params, const std::vector<ParamSpec>& device,
+                  const std::vector<ParamSpec>& light = {}) {
   for (const auto& s : params)
     std::printf("    %-14s %-6s default %-8s %s\n", s.key.c_str(),
                 std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
   for (const auto& s : device)
     std::printf("    %-14s %-6s default %-8s (device) %s\n", s.key.c_str(),
+                std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
+  for (const auto& s : light)
+    std::printf("    %-14s %-6s default %-8s (light) %s\n", s.key.c_str(),
                 std::string(to_string(s.type)).c_str(), s.default_value.c_str(), s.doc.c_str());
 }
 
@@ -84,7 +90,7 @@ void run_list(const ListCli& o) {
     if (e.origin != "built-in") std::printf("    from %s\n", e.origin.c_str());
     std::printf("    output basis %s, size knob %s\n",
                 std::string(to_string(e.output_basis)).c_str(), size_knob_summary(e).c_str());
-    print_params(e.params, e.device_params);
+    print_params(e.params, e.device_params, e.light_params);
   }
   std::printf("materials:\n");
   for (const auto& name : materials.names()) {
@@ -162,6 +168,7 @@ ImageComparison compare_image(const CompressCli& o, std::shared_ptr<const Compre
   const experiments::BenchOptions bo{ctx, CacheMode::kUse, !global_options().quiet};
   const experiments::SceneBench bench = experiments::prepare_bench(variant, spec, cache, bo);
   FrameRenderer renderer(bench.scene.mesh, bench.materials, std::move(ct), ctx);
+  renderer.set_light_options(ParamSet::parse_assignments(o.light_params, "--light-param"));
   renderer.set_camera(bench.cameras.front());
   renderer.set_environment(bench.lights.front().radiance);
   (void)renderer.render();
@@ -176,6 +183,8 @@ void run_compress(const CompressCli& o) {
   (void)ParamSet(o.backend, entry.params, params);
   const auto device_options = ParamSet::parse_assignments(o.device_params, "--device-param");
   (void)CompressorRegistry::instance().device_options(o.backend, device_options);
+  const auto light_options = ParamSet::parse_assignments(o.light_params, "--light-param");
+  (void)CompressorRegistry::instance().light_options(o.backend, light_options);
 
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));
   StageCache cache;
@@ -188,9 +197,9 @@ void run_compress(const CompressCli& o) {
                       o.force ? CacheMode::kRefresh : CacheMode::kUse, !global_options().quiet);
   auto ctx = open_device_from_options();
   const auto lights = evaluation_lights(desc.cubemap_resolution, o.lights);
-  const BackendEvaluation ev =
-      evaluate_backend(*cr.compressed, t, lights, ctx ? &*ctx : nullptr,
-                       {.repeats = o.repeat, .device_options = device_options});
+  const BackendEvaluation ev = evaluate_backend(
+      *cr.compressed, t, lights, ctx ? &*ctx : nullptr,
+      {.repeats = o.repeat, .device_options = device_options, .light_options = light_options});
   if (!o.save.empty()) save_compressed(*cr.compressed, o.save);
 
   const StorageReport storage = cr.compressed->storage();
@@ -206,6 +215,7 @@ void run_compress(const CompressCli& o) {
     j["scene"] = desc.name;
     j["backend"] = o.backend;
     j["parameters"] = cr.params;
+    j["light_options"] = light_options;
     j["cache_hit"] = cr.cache_hit;
     j["compress_seconds"] = cr.compress_seconds;
     j["storage_bytes"] = storage.total_bytes();
@@ -257,6 +267,8 @@ void run_compress(const CompressCli& o) {
   std::printf("scene            %s, backend %s%s\n", desc.name.c_str(), o.backend.c_str(),
               cr.cache_hit ? "  (compressed result from cache)" : "");
   for (const auto& [k, v] : cr.params) std::printf("  %s = %s\n", k.c_str(), v.c_str());
+  for (const auto& [k, v] : light_options)
+    std::printf("  %s = %s (light option)\n", k.c_str(), v.c_str());
   std::printf("compress         %.2f s\n", cr.compress_seconds);
   std::printf(
       "storage          %.2f MB (%.3f %% of the dense %.0f MB)\n", storage.total_bytes() / 1e6,
@@ -334,6 +346,9 @@ void add_backend_commands(CLI::App& app) {
   c->add_option("--device-param", co->device_params,
                 "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
                 "never recompresses)");
+  c->add_option("--light-param", co->light_params,
+                "Light option of the backend key=value, e.g. light_terms=100 for haar (repeatable; "
+                "changes the relight, never recompresses; prtlab list shows them as (light))");
   c->add_option("--lights", co->lights, "Number of evaluation environments (1-8)")
       ->check(CLI::Range(1, 8));
   c->add_option("--repeat", co->repeat, "Timed relights (median reported)")

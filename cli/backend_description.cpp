@@ -84,9 +84,11 @@ nlohmann::json param_spec_json(const ParamSpec& s) {
 }
 
 nlohmann::json backend_json(const CompressorEntry& e) {
-  nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array();
+  nlohmann::json params = nlohmann::json::array(), device = nlohmann::json::array(),
+                 light = nlohmann::json::array();
   for (const auto& s : e.params) params.push_back(param_spec_json(s));
   for (const auto& s : e.device_params) device.push_back(param_spec_json(s));
+  for (const auto& s : e.light_params) light.push_back(param_spec_json(s));
   nlohmann::json knob = nullptr;
   if (e.size_knob)
     knob = {{"key", e.size_knob->key},
@@ -103,7 +105,8 @@ nlohmann::json backend_json(const CompressorEntry& e) {
           {"output_basis", std::string(to_string(e.output_basis))},
           {"size_knob", knob},
           {"parameters", params},
-          {"device_parameters", device}};
+          {"device_parameters", device},
+          {"light_parameters", light}};
 }
 
 std::string size_knob_summary(const CompressorEntry& e) {
@@ -119,15 +122,20 @@ std::string backend_markdown(const CompressorEntry& e) {
   for (const auto& s : e.params) out += table_row(s, "");
   for (const auto& s : shared_param_specs()) out += table_row(s, " (shared)");
   for (const auto& s : e.device_params) out += table_row(s, " (device)");
+  for (const auto& s : e.light_params) out += table_row(s, " (light)");
   out += "\n";
   out += e.size_knob ? fmt::format("- **size knob:** `{}` {}\n", e.size_knob->key, knob_detail(e))
                      : "- **size knob:** none (the storage does not depend on the parameters)\n";
   out += fmt::format("- **output basis:** {}\n", to_string(e.output_basis));
   out += fmt::format("- **inputs besides T:** {}\n", inputs_summary(e.inputs));
-  out += e.device_params.empty()
-             ? "\n(shared: every backend accepts it.)\n"
-             : "\n(shared: every backend accepts it; device: an option of the OpenCL path, "
-               "`--device-param`, never recompresses.)\n";
+  out += "\n(shared: every backend accepts it";
+  if (!e.device_params.empty())
+    out += "; device: an option of the OpenCL path, `--device-param`, never recompresses";
+  if (!e.light_params.empty())
+    out +=
+        "; light: an option of the light projection at run time, `--light-param` or a point's "
+        "parameter in an experiment, changes the relight but never recompresses";
+  out += ".)\n";
   return out;
 }
 

@@ -38,6 +38,7 @@ struct SceneCli {
   std::string backend;
   std::vector<std::string> params;
   std::vector<std::string> device_params;
+  std::vector<std::string> light_params;
   std::string material = "full";
   std::vector<std::string> material_params;
   std::string env;
@@ -72,6 +73,9 @@ void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("--device-param", o.device_params,
                 "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
                 "never recompresses)");
+  c->add_option("--light-param", o.light_params,
+                "Light option of the backend key=value, e.g. light_terms=100 for haar (repeatable; "
+                "changes the relight, never recompresses)");
   c->add_option("--material", o.material,
                 "Material backend the part BTFs are shaded through (prtlab list: materials)")
       ->capture_default_str();
@@ -108,6 +112,7 @@ struct Prepared {
   Camera camera;
   std::map<std::string, std::string> params;           // canonical
   std::map<std::string, std::string> device_options;   // as given (--device-param)
+  std::map<std::string, std::string> light_options;    // as given (--light-param)
   std::map<std::string, std::string> material_params;  // canonical
   std::shared_ptr<const CompressedTransfer> compressed;
   bool transfer_cache_hit = false, compress_cache_hit = false;
@@ -128,6 +133,8 @@ Prepared prepare(const SceneCli& o, int default_width, int default_height,
   (void)ParamSet(o.backend, entry.params, assignments);
   p.device_options = ParamSet::parse_assignments(o.device_params, "--device-param");
   (void)CompressorRegistry::instance().device_options(o.backend, p.device_options);
+  p.light_options = ParamSet::parse_assignments(o.light_params, "--light-param");
+  (void)CompressorRegistry::instance().light_options(o.backend, p.light_options);
   const auto material_assignments =
       ParamSet::parse_assignments(o.material_params, "--material-param");
   const auto& material_entry = MaterialRegistry::instance().get(o.material);
@@ -258,6 +265,7 @@ void run_render(const RenderCli& o) {
       o.rotate_deg == 0.0 ? p.env : rotate_latlong_y(p.env, o.rotate_deg), o.background_resolution);
   FrameRenderer renderer(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr,
                          p.shading, p.device_options);
+  renderer.set_light_options(p.light_options);
   renderer.set_camera(p.camera);
   renderer.set_environment(env, &background);
   const FrameStats stats = renderer.render();
@@ -689,6 +697,7 @@ void run_fps(const FpsCli& o) {
   }
   FrameRenderer r(p.scene.mesh, p.materials, p.compressed, p.ctx ? &*p.ctx : nullptr, p.shading,
                   p.device_options);
+  r.set_light_options(p.light_options);
   r.set_culling(!o.no_cull);
   // Warm-up: kernel builds, first launches, caches.
   r.set_camera(cameras[0]);

@@ -13,6 +13,7 @@
 #include "prtlab/compress/backend_evaluation.h"
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/storage/data_paths.h"
@@ -46,6 +47,7 @@ struct RelightCli {
   std::string backend;
   std::vector<std::string> params;
   std::vector<std::string> device_params;
+  std::vector<std::string> light_params;
 };
 
 void write_local_radiance(const LocalRadiance& out, const std::string& file,
@@ -69,6 +71,8 @@ void write_local_radiance(const LocalRadiance& out, const std::string& file,
 void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
                          const std::filesystem::path& env_file, Cubemap cube) {
   const auto& entry = CompressorRegistry::instance().get(o.backend);
+  const auto light_options = ParamSet::parse_assignments(o.light_params, "--light-param");
+  (void)CompressorRegistry::instance().light_options(o.backend, light_options);
   StageCache cache;
   PrepareOptions popt;
   popt.show_progress = !global_options().quiet;
@@ -83,10 +87,12 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
   const auto ev = evaluate_backend(
       *cr.compressed, t, lights, ctx ? &*ctx : nullptr,
       {.repeats = o.repeat,
-       .device_options = ParamSet::parse_assignments(o.device_params, "--device-param")});
+       .device_options = ParamSet::parse_assignments(o.device_params, "--device-param"),
+       .light_options = light_options});
   if (!o.out.empty()) {
     LocalRadiance out;
-    cr.compressed->relight(cr.compressed->project_light(lights.front().radiance), out);
+    cr.compressed->relight(
+        project_light_with(*cr.compressed, lights.front().radiance, light_options), out);
     write_local_radiance(out, o.out, desc.name, env_file.string(), o.backend);
   }
   if (o.json) {
@@ -95,6 +101,7 @@ void run_backend_relight(const RelightCli& o, const SceneDesc& desc,
     j["env"] = env_file.string();
     j["backend"] = o.backend;
     j["parameters"] = cr.params;
+    j["light_options"] = light_options;
     j["repeat"] = o.repeat;
     j["ms_per_relight"] = ev.ms_cpp;
     j["ms_project_light"] = ev.ms_project;
@@ -302,6 +309,9 @@ void add_transfer_commands(CLI::App& app) {
   r->add_option("--device-param", rel->device_params,
                 "Device option of the backend key=value, e.g. opencl_kernel=lanes (repeatable; "
                 "never recompresses)");
+  r->add_option("--light-param", rel->light_params,
+                "Light option of the backend key=value, e.g. light_terms=100 for haar (repeatable; "
+                "changes the relight, never recompresses)");
   r->callback([rel] { run_relight(*rel); });
 }
 

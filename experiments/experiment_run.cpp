@@ -15,6 +15,7 @@
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/render/image_error.h"
 #include "prtlab/storage/atomic_file.h"
 #include "result_images.h"
@@ -296,9 +297,9 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
               p[entry.size_knob->key] = format_knob(v, integer);
               report(fmt::format("{} {}: storage search, {} = {}", variant.name, backend,
                                  entry.size_knob->key, p[entry.size_knob->key]));
-              const CompressionResult cr =
-                  compress_cached(backend, p, bench.prepared.input(entry),
-                                  bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
+              const CompressionResult cr = compress_cached(
+                  backend, split_point_params(entry, p).compression, bench.prepared.input(entry),
+                  bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
               return cr.compressed->storage().total_bytes();
             };
             const StorageSearch s =

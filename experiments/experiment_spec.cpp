@@ -12,6 +12,7 @@
 #include "prtlab/base/build_info.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/compress/params.h"
 #include "prtlab/storage/data_paths.h"
 
@@ -439,10 +440,11 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
       flag("log_y", c.log_y);
       if (registry.contains(c.backend)) {
         const auto& entry = registry.get(c.backend);
+        const std::vector<ParamSpec> point_specs = point_param_specs(entry);
         for (const std::string* key : {&c.x, &c.series, &c.panel}) {
           if (key->empty()) continue;
           const bool known =
-              std::any_of(entry.params.begin(), entry.params.end(),
+              std::any_of(point_specs.begin(), point_specs.end(),
                           [&](const ParamSpec& p) { return p.key == *key; }) ||
               (key == &c.x && (std::ranges::count(point_record_columns(), *key) > 0 ||
                                key->starts_with("metrics.")));
@@ -459,24 +461,31 @@ ExperimentSpec parse_experiment(const fs::path& file, const std::string& variant
   }
   // Parameters of backends that exist are validated now (a typo costs nothing); those of a
   // backend that is not registered (a plugin not loaded this time) are left alone.
+  // A point's parameters may hold the backend's light options (light_options.h) beside its
+  // compression parameters.
   for (const auto& b : s.backends) {
     const auto& entry = registry.get(b);
     std::map<std::string, std::string> probe =
         s.params.contains(b) ? s.params.at(b) : std::map<std::string, std::string>{};
+    const auto validate = [&](const std::map<std::string, std::string>& point) {
+      const PointParams split = split_point_params(entry, point);
+      (void)ParamSet(b, entry.params, split.compression);
+      (void)registry.light_options(b, split.light);
+    };
     try {
-      (void)ParamSet(b, entry.params, probe);
+      validate(probe);
       if (s.points.contains(b))
         for (const auto& point : s.points.at(b)) {
           auto with = probe;
           for (const auto& [k, v] : point) with[k] = v;
-          (void)ParamSet(b, entry.params, with);
+          validate(with);
         }
       if (s.grid.contains(b))
         for (const auto& [k, values] : s.grid.at(b))
           for (const auto& v : values) {
             auto with = probe;
             with[k] = v;
-            (void)ParamSet(b, entry.params, with);
+            validate(with);
           }
     } catch (const Error& e) {
       throw InputError(file, e.what());

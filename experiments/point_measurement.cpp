@@ -12,6 +12,7 @@
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/frame_renderer.h"
@@ -123,7 +124,11 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
   const auto t0 = std::chrono::steady_clock::now();
   const auto& registry = CompressorRegistry::instance();
   const CompressorEntry& entry = registry.get(backend);
-  const auto canonical = ParamSet(backend, entry.params, params).canonical();
+  // Light options (light_options.h) are not compressed: they join the point's parameters only
+  // where they differ from their defaults, so a point that does not set them keeps its key.
+  const PointParams split = split_point_params(entry, params);
+  auto canonical = ParamSet(backend, entry.params, split.compression).canonical();
+  for (const auto& [k, v] : canonical_light_options(entry, split.light)) canonical[k] = v;
   const bool images = spec.images && keep_images;
   Hasher h;
   h.add(kPointKind).add(kPointVersion).add(b.prepared.transfer.key).add(backend).add(entry.version);
@@ -139,8 +144,8 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     const auto tm = std::chrono::steady_clock::now();
     const TransferMatrix& t = b.prepared.transfer.result.transfer;
     CompressionResult cr =
-        compress_cached(backend, params, b.prepared.input(entry), b.prepared.transfer.key, cache,
-                        o.cache_mode, o.show_progress);
+        compress_cached(backend, split.compression, b.prepared.input(entry),
+                        b.prepared.transfer.key, cache, o.cache_mode, o.show_progress);
     const StorageReport storage = cr.compressed->storage();
     const double flops = cr.compressed->flops_per_relight();
     json r;
@@ -175,6 +180,7 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
     EvaluationOptions eo;
     eo.repeats = spec.timing ? spec.repeats : 1;
     eo.frobenius_relights = spec.frobenius_relights;
+    eo.light_options = split.light;
     const BackendEvaluation ev = evaluate_backend(*cr.compressed, t, b.lights, o.device, eo);
     r["device"] = ev.device;
     if (spec.timing) {
@@ -219,6 +225,7 @@ PointOutcome measure_point(const SceneBench& b, const ExperimentSpec& spec,
       FrameRenderer renderer(b.scene.mesh, b.materials,
                              std::shared_ptr<const CompressedTransfer>(std::move(cr.compressed)),
                              o.device);
+      renderer.set_light_options(split.light);
       if (spec.images) {
         std::vector<double> rel, psnr;
         for (std::size_t v = 0; v < b.cameras.size(); ++v) {

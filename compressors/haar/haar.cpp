@@ -134,6 +134,17 @@ LightCoeffs HaarTransfer::project_light(const Cubemap& radiance,
   return approximate_light(pixels.values, CubemapLayout(a_.resolution), approximation);
 }
 
+LightCoeffs HaarTransfer::project_light_under(const Cubemap& radiance,
+                                              const ParamSet& light_options) const {
+  LightApproximation a;
+  a.terms = static_cast<std::size_t>(light_options.get_int("light_terms"));
+  a.weight = light_weight_from(light_options.get_string("light_weight"));
+  // Every term is the pixel light itself (bit-identical relight): no transform per light.
+  if (a.terms == 0 || a.terms >= static_cast<std::size_t>(a_.pixel_count))
+    return project_light(radiance);
+  return project_light(radiance, a);
+}
+
 void HaarTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   const bool wavelet = check_light(light, static_cast<std::size_t>(a_.pixel_count));
   out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
@@ -379,6 +390,25 @@ CompressorEntry registry_entry() {
        "columns = Ng 2003's order, one work-group per 2,048-row block reading only the columns "
        "of the light's non-zero terms (a wavelet-basis light truncated to N terms reads N "
        "columns); the column layout is derived at upload; no vertex-subset relight"},
+  };
+  e.light_params = {
+      {"light_terms",
+       ParamType::kInt,
+       "0",
+       0.0,
+       1e9,
+       {},
+       "Ng 2003's light approximation at run time: keep the N Haar coefficients of the light of "
+       "largest weight x |c| (the paper: 50-200); 0 = every term (the pixel light). Never "
+       "recompresses"},
+      {"light_weight",
+       ParamType::kEnum,
+       "solid_angle",
+       std::nullopt,
+       std::nullopt,
+       {"solid_angle", "face_area", "none"},
+       "the weight of the light_terms ranking: the solid angle of a coefficient's support, its "
+       "area on the cube face, or none (|c| alone)"},
   };
   e.size_knob =
       SizeKnob{"k", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 512.0, SizeKnob::Scale::kLog};

@@ -135,6 +135,9 @@ class HaarTransfer final : public CompressedTransfer, public StoredModel {
   /// `approximation.terms` kept (haar_light.h), as a light in the wavelet basis (kLightBasis).
   /// The archive does not depend on it; with every term the relight has project_light's bits.
   LightCoeffs project_light(const Cubemap& radiance, const LightApproximation& approximation) const;
+  /// The registry's light options: light_terms (N; 0 = every term) and light_weight.
+  LightCoeffs project_light_under(const Cubemap& radiance,
+                                  const ParamSet& light_options) const override;
   /// A pixel light (transformed here) or a wavelet-basis light (multiplied as it is).
   void relight(const LightCoeffs& light, LocalRadiance& out) const override;
   bool supports_vertex_subset() const override { return true; }

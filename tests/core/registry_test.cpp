@@ -177,6 +177,28 @@ TEST(Registry, RefusesDuplicatesAndIncompleteEntries) {
   bad_default.params = {{"k", ParamType::kInt, "0", 1.0, 8.0, {}, "must be 1..8"}};
   EXPECT_THROW(local.add(bad_default), Error);
   EXPECT_EQ(local.names(), std::vector<std::string>{"alpha"});
+  // A light option (run-time, never compressed) may not reuse a parameter's, a device option's
+  // or a shared parameter's key: a point's parameters hold them side by side.
+  const ParamSpec n{"n", ParamType::kInt, "1", 1.0, 8.0, {}, "a count"};
+  for (const auto& [where, clash] : std::vector<std::pair<std::string, CompressorEntry>>{
+           {"a parameter", dummy_entry("epsilon")},
+           {"a device option", dummy_entry("zeta")},
+           {"a shared parameter", dummy_entry("eta")}}) {
+    CompressorEntry e = clash;
+    e.light_params = {n};
+    if (where == "a parameter") e.params.push_back(n);
+    if (where == "a device option") e.device_params = {n};
+    if (where == "a shared parameter") e.light_params[0].key = "seed";
+    const std::string msg = message_of([&] { local.add(e); });
+    EXPECT_TRUE(contains(msg, where) && contains(msg, "a light option")) << msg;
+  }
+  CompressorEntry light = dummy_entry("theta");
+  light.light_params = {n};
+  local.add(light);
+  EXPECT_EQ(local.light_options("theta", {{"n", "3"}}).get_int("n"), 3);
+  EXPECT_THROW(local.light_options("theta", {{"n", "9"}}), ParameterError);
+  EXPECT_THROW(local.light_options("alpha", {{"n", "3"}}), ParameterError);
+  EXPECT_EQ(local.names(), (std::vector<std::string>{"alpha", "theta"}));
 
   // The global registry refuses a second 'uncompressed' and keeps the first.
   auto& global = CompressorRegistry::instance();

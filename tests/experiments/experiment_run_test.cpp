@@ -501,6 +501,69 @@ x = "entries_kept"
   EXPECT_THROW(parse(bad), InputError);
 }
 
+// A backend's light options (haar's light_terms, Ng 2003's N) are point parameters that never
+// recompress: a sweep over them compresses once, measures each N, names N in the points that
+// set it (not in the default's), and curves may plot against it; a bad value is refused by the
+// parser, naming the file.
+TEST_F(ExperimentRun, LightOptionsArePointParametersThatNeverRecompress) {
+  const auto f = write_spec("light", R"(
+name = "tiny-light"
+kind = "sweep"
+scenes = ["tiny-sphere-plane"]
+backends = ["haar"]
+environments = ["courtyard"]
+images = false
+timing = false
+frobenius_relights = 0
+[params.haar]
+k = 16
+[grid.haar]
+light_terms = [0, 8, 64]
+[[curves]]
+backend = "haar"
+x = "light_terms"
+y = "lstar_rel_l2_mean"
+)");
+  const RunSummary s = run_experiment(parse(f), options("light"));
+  const json& points = s.result.at("points");
+  ASSERT_EQ(points.size(), 3u);
+  std::map<std::string, double> error;
+  int fresh_compressions = 0;
+  for (const auto& p : points) {
+    const std::string params = p.at("params").get<std::string>();
+    const auto canonical = p.at("canonical_params");
+    const std::string n = canonical.contains("light_terms")
+                              ? canonical.at("light_terms").get<std::string>()
+                              : std::string("0");
+    EXPECT_EQ(params.find("light_terms") != std::string::npos, n != "0") << params;
+    error[n] = p.at("lstar_rel_l2_mean").get<double>();
+    fresh_compressions += !p.at("compress_cache_hit").get<bool>();
+  }
+  EXPECT_EQ(fresh_compressions, 1);
+  ASSERT_EQ(error.size(), 3u);
+  // 8 of the light's 384 coefficients: a coarse light, farther from T L than either the 64-term
+  // light or the whole light (whose difference is T~'s alone).
+  EXPECT_GT(error.at("8"), error.at("64"));
+  EXPECT_GT(error.at("8"), error.at("0"));
+  EXPECT_NE(error.at("64"), error.at("0"));
+
+  const auto bad = write_spec("bad-light", R"(
+name = "x"
+kind = "sweep"
+scenes = ["tiny-sphere-plane"]
+backends = ["haar"]
+[grid.haar]
+light_terms = [-3]
+)");
+  try {
+    (void)parse(bad);
+    FAIL() << "accepted light_terms = -3";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("light options"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(ExperimentRun, TheRepositorysExperimentFilesParse) {
   const auto files = experiment_files();
   std::vector<std::string> names;

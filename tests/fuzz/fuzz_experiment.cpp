@@ -1,7 +1,8 @@
 // Fuzz target: the experiment-file parsers (experiment_spec.h, run_plan.h, material_table.h,
 // stability_suite.h). The input is the TOML file: it is parsed at its top level and with every
-// variant it declares, as `prtlab experiment check` does, and a transfer experiment's grid is
-// counted against the default point budget. Nothing runs: no scene is prepared and no map read.
+// variant it declares, as `prtlab experiment run` does before it runs, and a transfer experiment's
+// grid is counted against the default point budget. Nothing runs: no scene is prepared and no map
+// read.
 #include <cstddef>
 #include <cstdint>
 #include <span>

@@ -21,6 +21,7 @@
 #include "haar/tests/stored_terms.h"
 #include "prtlab/base/error.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
@@ -164,6 +165,53 @@ TEST(HaarLight, EveryTermRelightsWithThePixelLightsBits) {
           ASSERT_EQ(std::memcmp(&part.values[v * m + j], &exact.values[v * m + j], sizeof(Rgb)), 0);
     }
   }
+}
+
+// The registry's light options (light_options.h) reach the same approximation as the backend's
+// own call, bit for bit: light_terms = N with its weight, 0 or N >= pixels the pixel light; an
+// unknown option or value is refused naming the backend's light options.
+TEST(HaarLight, LightOptionsProjectAsTheBackendsOwnApproximation) {
+  const TransferMatrix t = test_transfer(8, 4);
+  const Cubemap env = test_environment(8, 1);
+  const auto ct = compress(t, {{"k", "12"}});
+  const auto& h = dynamic_cast<const HaarTransfer&>(*ct);
+  for (const auto& [weight, name] :
+       std::vector<std::pair<LightWeight, std::string>>{{LightWeight::kSolidAngle, "solid_angle"},
+                                                        {LightWeight::kFaceArea, "face_area"},
+                                                        {LightWeight::kNone, "none"}}) {
+    const LightCoeffs own = h.project_light(env, {20, weight});
+    const LightCoeffs via =
+        project_light_with(*ct, env, {{"light_terms", "20"}, {"light_weight", name}});
+    EXPECT_EQ(via.basis, kLightBasis);
+    ASSERT_EQ(via.values.size(), own.values.size());
+    EXPECT_EQ(std::memcmp(via.values.data(), own.values.data(), own.values.size() * sizeof(Rgb)), 0)
+        << name;
+    EXPECT_EQ(nonzero_indices(via).size(), 20u) << name;
+  }
+  const LightCoeffs pixel = ct->project_light(env);
+  for (const char* all : {"0", "384", "100000"}) {
+    const LightCoeffs l = project_light_with(*ct, env, {{"light_terms", all}});
+    EXPECT_EQ(l.basis, "pixel") << all;
+    EXPECT_EQ(std::memcmp(l.values.data(), pixel.values.data(), pixel.values.size() * sizeof(Rgb)),
+              0)
+        << all;
+  }
+  for (const std::map<std::string, std::string>& bad :
+       std::vector<std::map<std::string, std::string>>{
+           {{"terms", "20"}}, {{"light_terms", "-1"}}, {{"light_weight", "area"}}}) {
+    try {
+      (void)project_light_with(*ct, env, bad);
+      ADD_FAILURE() << "accepted " << bad.begin()->first;
+    } catch (const ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find("haar (light options)"), std::string::npos) << e.what();
+    }
+  }
+  // A backend without light options refuses any.
+  const auto plain =
+      CompressorRegistry::instance()
+          .create("uncompressed", {})
+          ->compress({t, nullptr, CubemapLayout(8), HemisphereGrid(2)}, Progress::null());
+  EXPECT_THROW((void)project_light_with(*plain, env, {{"light_terms", "20"}}), ParameterError);
 }
 
 TEST(HaarLight, TruncationKeepsExactlyTheBestWeightedCoefficients) {

@@ -10,6 +10,7 @@
 #include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/storage/data_paths.h"
@@ -115,7 +116,7 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
   const HemisphereGrid grid(static_cast<int>(std::lround(std::sqrt(exact.local_count()))));
   LocalRadiance out;
   for (const auto& light : lights) {
-    const LightCoeffs coeffs = ct.project_light(light.radiance);
+    const LightCoeffs coeffs = project_light_with(ct, light.radiance, options.light_options);
     ct.relight(coeffs, out);
     const LocalRadiance pixel = to_pixel_basis(out, grid);
     const LocalRadiance ref = exact_double(exact, light.radiance);
@@ -138,11 +139,11 @@ BackendEvaluation evaluate_backend(const CompressedTransfer& ct, const TransferM
   }
 
   using clock = std::chrono::steady_clock;
-  const LightCoeffs coeffs = ct.project_light(lights.front().radiance);
+  const LightCoeffs coeffs = project_light_with(ct, lights.front().radiance, options.light_options);
   std::vector<double> ms, ms_proj;
   for (int i = 0; i < std::max(1, repeats); ++i) {
     auto t0 = clock::now();
-    const LightCoeffs c = ct.project_light(lights.front().radiance);
+    const LightCoeffs c = project_light_with(ct, lights.front().radiance, options.light_options);
     ms_proj.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
     t0 = clock::now();
     ct.relight(coeffs, out);

@@ -2,6 +2,7 @@
 
 #include <numeric>
 
+#include "compress/registry_entry_check.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/storage/archive.h"
@@ -34,18 +35,8 @@ void CompressorRegistry::add(CompressorEntry entry) {
     throw Error(fmt::format("compressor registry: '{}' is registered twice ({} and {})", entry.name,
                             entries_.at(entry.name).origin, entry.origin));
   // Fail at registration, not at first use, when a backend's own specs are inconsistent.
-  ParamSet validate(entry.name, entry.params, {});
-  ParamSet validate_device(entry.name + " (device options)", entry.device_params, {},
-                           ParamSet::Shared::kExclude);
-  (void)validate;
-  (void)validate_device;
-  for (const auto& d : entry.device_params)
-    for (const auto& p : entry.params)
-      if (d.key == p.key)
-        throw Error(
-            fmt::format("compressor registry: '{}' declares '{}' both as a parameter and "
-                        "as a device option",
-                        entry.name, d.key));
+  check_entry_params("compressor", entry.name, entry.params, entry.device_params,
+                     entry.light_params);
   if (entry.size_knob)
     entry.size_knob = resolve_size_knob(entry.name, *entry.size_knob, entry.params);
   auto name = entry.name;
@@ -76,6 +67,12 @@ ParamSet CompressorRegistry::device_options(
     const std::string& name, const std::map<std::string, std::string>& options) const {
   const auto& e = get(name);
   return ParamSet(name + " (device options)", e.device_params, options, ParamSet::Shared::kExclude);
+}
+
+ParamSet CompressorRegistry::light_options(
+    const std::string& name, const std::map<std::string, std::string>& options) const {
+  const auto& e = get(name);
+  return ParamSet(name + " (light options)", e.light_params, options, ParamSet::Shared::kExclude);
 }
 
 std::unique_ptr<DeviceRelighter> upload_compressed(

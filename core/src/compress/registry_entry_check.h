@@ -8,9 +8,11 @@
 
 namespace prt {
 
-/// Throws prt::Error when a default is invalid or a key is declared both as a parameter and as
-/// a device option. `kind` ("compressor", "material") prefixes the message.
+/// Throws prt::Error when a default is invalid or a key is declared twice among the parameters
+/// (with the shared ones), the device options and the light options. `kind` ("compressor",
+/// "material") prefixes the message.
 void check_entry_params(const std::string& kind, const std::string& name,
-                        std::span<const ParamSpec> params, std::span<const ParamSpec> device);
+                        std::span<const ParamSpec> params, std::span<const ParamSpec> device,
+                        std::span<const ParamSpec> light = {});
 
 }  // namespace prt

@@ -8,6 +8,7 @@
 #include "prtlab/base/statistics.h"
 #include "prtlab/btf/scene_btfs.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/compress/light_options.h"
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/opencl/cl_buffer.h"
 #include "prtlab/opencl/cl_context.h"
@@ -60,6 +61,7 @@ struct FrameRenderer::Impl {
   bool cull = true;
   std::vector<std::uint32_t> visible;
   std::optional<LightCoeffs> light;
+  std::map<std::string, std::string> light_options;  // the backend's light_params
   std::uint64_t light_gen = 0, all_gen = 0;
   std::vector<std::uint64_t> relit_gen;
   LocalRadiance relit;  // C++ path with kToPixelBins: L* in the backend's basis, kept
@@ -221,10 +223,15 @@ void FrameRenderer::set_camera(const Camera& camera) {
   }
 }
 
+void FrameRenderer::set_light_options(const std::map<std::string, std::string>& options) {
+  (void)CompressorRegistry::instance().light_options(impl_->transfer->backend(), options);
+  impl_->light_options = options;
+}
+
 void FrameRenderer::set_environment(const Cubemap& environment, const Cubemap* background) {
   Impl& s = *impl_;
   auto t0 = Clock::now();
-  s.light = s.transfer->project_light(environment);
+  s.light = project_light_with(*s.transfer, environment, s.light_options);
   ++s.light_gen;
   s.pending.project_ms += ms_since(t0);
   t0 = Clock::now();

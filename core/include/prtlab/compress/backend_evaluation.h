@@ -52,6 +52,9 @@ struct BackendEvaluation {
 struct EvaluationOptions {
   int repeats = 20;                                   ///< relights timed (medians reported)
   std::map<std::string, std::string> device_options;  ///< the backend's device_params
+  /// The backend's light_params (light_options.h): every light of the evaluation is projected
+  /// under them. The Frobenius error stays that of T~ (its probe lights are not approximated).
+  std::map<std::string, std::string> light_options;
   /// Relights spent on the Frobenius error: exact when N / 3 fits, else Hutchinson's estimate;
   /// 0 skips it (frobenius stays zero with relights = 0).
   int frobenius_relights = 64;

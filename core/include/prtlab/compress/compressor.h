@@ -137,6 +137,14 @@ class CompressedTransfer {
 
   /// Project a radiance cubemap into this backend's light basis.
   virtual LightCoeffs project_light(const Cubemap& radiance) const = 0;
+  /// The same under run-time light options (CompressorEntry::light_params, validated, defaults
+  /// filled in): a backend that declares some overrides this; callers go through
+  /// project_light_with() (light_options.h). Default: the options change nothing.
+  virtual LightCoeffs project_light_under(const Cubemap& radiance,
+                                          const ParamSet& light_options) const {
+    (void)light_options;
+    return project_light(radiance);
+  }
   /// C++ reference relight: out = T~ L (resized as needed).
   virtual void relight(const LightCoeffs& light, LocalRadiance& out) const = 0;
   /// Whether relight_vertices() relights only the given vertices (the frame loop's culling).

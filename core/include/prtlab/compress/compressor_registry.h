@@ -50,6 +50,12 @@ struct CompressorEntry {
   /// not in the stage-cache key, so changing one never recompresses. The conformance suite
   /// checks every combination of their choices against the C++ relight.
   std::vector<ParamSpec> device_params;
+  /// Options of the light projection at run time (Ng 2003's N light terms): unlike device
+  /// options they change the relight's result, but never the compressed data, so they are not
+  /// saved and not in a compression's cache key; changing one never recompresses. Passed to
+  /// CompressedTransfer::project_light_under(radiance, options) through project_light_with()
+  /// (light_options.h); an experiment point's parameters may hold them beside `params`.
+  std::vector<ParamSpec> light_params;
   BackendInputs inputs;  ///< what compress() reads from TransferInput besides T
   /// The basis every compressed result of this backend relights into (output_basis()), known
   /// before compressing so that callers size and shade without a result in hand.
@@ -93,6 +99,9 @@ class CompressorRegistry {
   /// Validate device options against the backend's device_params (ParameterError listing them).
   ParamSet device_options(const std::string& name,
                           const std::map<std::string, std::string>& options) const;
+  /// Validate light options against the backend's light_params (ParameterError listing them).
+  ParamSet light_options(const std::string& name,
+                         const std::map<std::string, std::string>& options) const;
 
  private:
   std::map<std::string, CompressorEntry> entries_;

@@ -106,6 +106,9 @@ class FrameRenderer {
   /// when given, is what misses show (e.g. a finer cubemap of the same environment); without it
   /// misses show the lighting cubemap itself.
   void set_environment(const Cubemap& environment, const Cubemap* background = nullptr);
+  /// The backend's light_params (light_options.h) for every later light change (validated:
+  /// ParameterError listing them). Does not relight by itself.
+  void set_light_options(const std::map<std::string, std::string>& options);
   /// How set_camera traces the G-buffer (packets by default; kSingle is the reference path).
   void set_primary_rays(PrimaryRays rays);
   /// Culling on (the default) or off. Off, every light change relights every vertex; either
