@@ -262,15 +262,19 @@ void write_archive_seeds(const fs::path& archive_dir, const fs::path& transfer_d
                 fs::copy_options::overwrite_existing);
 }
 
-void write_material_seeds(const fs::path& dir) {
+// A 4 x 4-texel checker BTF on side x side view and light grids: small seeds, fast to read.
+prt::Btf seed_btf(int side) {
   prt::BtfParams p;
   p.resolution = 4;
-  p.view_side = 3;
-  p.light_side = 3;
+  p.view_side = side;
+  p.light_side = side;
   p.supersampling = 1;
   p.geometry_grid = 32;
-  const auto btf =
-      std::make_shared<const prt::Btf>(prt::generate_btf(prt::make_btf_material("checker", 32), p));
+  return prt::generate_btf(prt::make_btf_material("checker", 32), p);
+}
+
+void write_material_seeds(const fs::path& dir) {
+  const auto btf = std::make_shared<const prt::Btf>(seed_btf(3));
   for (const std::string& name : prt::MaterialRegistry::instance().names())
     prt::save_material(*prt::compress_material(name, {}, btf), dir / fmt::format("{}.prt", name));
 }
@@ -335,13 +339,7 @@ std::string ubo_header(std::string_view signature, std::uint32_t side) {
 }
 
 void write_ubo_seeds(const fs::path& dir) {
-  prt::BtfParams p;
-  p.resolution = 4;
-  p.view_side = 2;
-  p.light_side = 2;
-  p.supersampling = 1;
-  p.geometry_grid = 32;
-  const prt::Btf btf = prt::generate_btf(prt::make_btf_material("checker", 32), p);
+  const prt::Btf btf = seed_btf(2);
   prt::write_ubo_fmf(btf, dir / "exact.btf");
   prt::write_ubo_fmf(btf, dir / "rank1-half.btf", {.components = 1, .scalar_bytes = 2});
   prt::write_ubo_bdi(btf, dir / "sparse.btf");
