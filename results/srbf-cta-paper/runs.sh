@@ -9,3 +9,5 @@ $B bunny-12k $R/bunny-12k.json "srbf_cta:clusters=34,$P" > $R/bunny-12k.log 2>&1
 $B bunny $R/bunny-more.json "srbf_cta:clusters=9,$P,spread=0.75" "srbf_cta:clusters=9,rank_view=16,rank_light=48,rank_vertex=24" > $R/bunny-more.log 2>&1
 # A rougher BRDF (more energy in the leading view terms), with and without the view truncation.
 $B bunny $R/bunny-rough.json "srbf_cta:clusters=9,$P,brdf_roughness=0.6" "srbf_cta:clusters=9,rank_view=16,rank_light=48,rank_vertex=24,brdf_roughness=0.6" > $R/bunny-rough.log 2>&1
+# The paper's vertex density on the largest bunny (47,960 vertices / 359 = 134 clusters), m = 0.6.
+$B bunny-48k $R/bunny-48k.json "srbf_cta:clusters=134,$P,brdf_roughness=0.6" > $R/bunny-48k.log 2>&1
