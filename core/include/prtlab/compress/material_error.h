@@ -10,8 +10,9 @@
 namespace prt {
 
 struct MaterialError {
-  double relative_l2 = 0;  ///< sqrt(sum (b~ - b)^2) / sqrt(sum b^2); NaN if b = 0 (relative_error.h)
-  double max_abs = 0;      ///< largest |b~ - b|
+  /// sqrt(sum (b~ - b)^2) / sqrt(sum b^2); NaN if b = 0 (base/relative_error.h)
+  double relative_l2 = 0;
+  double max_abs = 0;         ///< largest |b~ - b|
   double reference_l2 = 0;    ///< sqrt(sum b^2)
   std::uint64_t samples = 0;  ///< values compared (texels x views x lights x 3)
 };
