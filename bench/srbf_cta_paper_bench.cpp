@@ -5,16 +5,18 @@
 //
 //   srbf_cta_paper_bench <scene> <out.json> <run>...
 //
-// A run is "srbf_cta:k=v,k=v" (any srbf_cta parameters; signal=brdf is implied) or
-// "afcpca:k=v,...". afcpca: the folded signal Psi T_x (K x N per vertex) projected onto one
-// shared view basis U (K x rank_view, the top eigenvectors of sum_x T'_x T'_x^T), the pixels
-// split into `segments` runs of N / segments consecutive pixels, and per segment a CPCA
-// (core numeric/clustered_pca.h, iterative, `passes` classifications per component count) of
-// every vertex's rank_view x (N / segments) block with `clusters` clusters and `components`
-// weights; storage at 16 bits per value (means, components, weights) plus a cluster id per
-// vertex and segment. Parameters: terms (16), rank_view (8), segments (24), clusters, components
-// (12), passes (1), and the BRDF's brdf_diffuse / brdf_roughness / brdf_fresnel0 (srbf_cta's
-// defaults).
+// A run is "srbf_cta:k=v,k=v" (any srbf_cta parameters; signal=brdf is implied),
+// "cpca:k=v,..." (the registered cpca backend on the declared BRDF-weighted input, core
+// compress/brdf_signal.h: Sloan's CPCA of the K folded rows of every vertex, relit through Phi;
+// signal=brdf implied), or "afcpca:k=v,...". afcpca: the folded signal Psi T_x (K x N per vertex)
+// projected onto one shared view basis U (K x rank_view, the top eigenvectors of sum_x T'_x
+// T'_x^T), the pixels split into `segments` runs of N / segments consecutive pixels, and per
+// segment a CPCA (core numeric/clustered_pca.h, iterative, `passes` classifications per component
+// count) of every vertex's rank_view x (N / segments) block with `clusters` clusters and
+// `components` weights; storage at 16 bits per value (means, components, weights) plus a cluster id
+// per vertex and segment. Parameters: terms (16), rank_view (8), segments (24), clusters,
+// components (12), passes (1), and the BRDF's brdf_diffuse / brdf_roughness / brdf_fresnel0
+// (srbf_cta's defaults).
 //
 // The SE ratio is ||T~' - T'||_F^2 / ||T'||_F^2 with T' = Psi T the K-term signal in the pixel
 // basis (the paper's "raw PRT data ... by setting the BRDF terms to 16"). Logged at info level.
@@ -23,6 +25,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -114,6 +117,37 @@ nlohmann::json run_srbf_cta(const prt::PreparedScene& scene, Params p) {
   // The paper's accounting: raw = f32 dense K x N per vertex, SRBF data at 16 bits.
   j["raw_bytes"] = v * k * a.pixel_count * 4.0;
   j["srbf_bytes"] = v * k * a.srbf_count * 2.0;
+  j["seconds"] = seconds;
+  return j;
+}
+
+// Any registered backend that declares the BRDF-weighted input, through the run's preparation
+// (so the folded rows are built once for the runs on one BRDF).
+nlohmann::json run_backend(const prt::PreparedScene& scene, const std::string& name, Params p) {
+  p["signal"] = "brdf";
+  const prt::CompressorEntry& entry = prt::CompressorRegistry::instance().get(name);
+  if (!entry.inputs.brdf_signal)
+    throw prt::ParameterError(
+        fmt::format("backend '{}' does not declare the BRDF-weighted signal", name));
+  const auto compressor = prt::CompressorRegistry::instance().create(name, p);
+  const auto t0 = Clock::now();
+  const auto ct = compressor->compress(scene.input(entry), prt::Progress::null());
+  const double seconds = seconds_since(t0);
+  const prt::TransferMatrix& t = scene.transfer.result.transfer;
+  const double e = ct->expected_frobenius_error().value_or(std::nan(""));
+  nlohmann::json j;
+  j["kind"] = name;
+  j["params"] = p;
+  j["vertices"] = t.vertex_count();
+  j["brdf_terms"] = std::stoi(p.count("brdf_terms") ? p.at("brdf_terms") : "16");
+  j["se_ratio"] = e * e;
+  j["storage_bytes"] = ct->storage().total_bytes();
+  j["storage"] = nlohmann::json::array();
+  for (const auto& c : ct->storage().components)
+    j["storage"].push_back({{"name", c.name}, {"bytes", c.bytes}});
+  j["raw_bytes"] = static_cast<double>(t.vertex_count()) * j["brdf_terms"].get<int>() *
+                   static_cast<double>(t.cols()) * 4.0;
+  j["flops_per_relight"] = ct->flops_per_relight();
   j["seconds"] = seconds;
   return j;
 }
@@ -216,7 +250,9 @@ int main(int argc, char** argv) {
     prt::set_log_level(prt::LogLevel::kInfo);
     const prt::SceneDesc desc = prt::parse_scene(prt::resolve_scene(argv[1]));
     prt::StageCache cache;
-    const prt::PreparedScene scene = prt::prepare_scene(desc, prt::BackendInputs{}, cache);
+    prt::BackendInputs needs;
+    needs.brdf_signal = true;
+    const prt::PreparedScene scene = prt::prepare_scene(desc, needs, cache);
     nlohmann::json out;
     const prt::BuildInfo& b = prt::build_info();
     out["scene"] = desc.name;
@@ -230,10 +266,11 @@ int main(int argc, char** argv) {
       prt::log_info("run {}: {}", i - 2, argv[i]);
       nlohmann::json j =
           kind == "srbf_cta" ? run_srbf_cta(scene, params)
-          : kind == "afcpca"
-              ? run_afcpca(scene, params)
+          : kind == "afcpca" ? run_afcpca(scene, params)
+          : kind == "cpca"
+              ? run_backend(scene, kind, params)
               : throw prt::ParameterError(fmt::format(
-                    "run '{}': kind '{}' is neither srbf_cta nor afcpca", argv[i], kind));
+                    "run '{}': kind '{}' is none of srbf_cta, cpca, afcpca", argv[i], kind));
       j["run"] = argv[i];
       prt::log_info("run {}: {}", i - 2, j.dump());
       out["runs"].push_back(std::move(j));

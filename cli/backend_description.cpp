@@ -50,6 +50,8 @@ std::string inputs_summary(const BackendInputs& in) {
   if (in.sh_order > 0) add(fmt::format("the SH transfer of order {}", in.sh_order));
   if (in.mesh) add("the mesh");
   if (in.btfs) add("the BTFs");
+  if (in.brdf_signal)
+    add("the BRDF-weighted signal (`signal=brdf`; its parameters `brdf_*` come with it)");
   return out.empty() ? "none" : out;
 }
 
@@ -101,7 +103,10 @@ nlohmann::json backend_json(const CompressorEntry& e) {
           {"lossless", e.lossless},
           {"origin", e.origin},
           {"inputs",
-           {{"sh_order", e.inputs.sh_order}, {"mesh", e.inputs.mesh}, {"btfs", e.inputs.btfs}}},
+           {{"sh_order", e.inputs.sh_order},
+            {"mesh", e.inputs.mesh},
+            {"btfs", e.inputs.btfs},
+            {"brdf_signal", e.inputs.brdf_signal}}},
           {"output_basis", std::string(to_string(e.output_basis))},
           {"size_knob", knob},
           {"parameters", params},

@@ -6,6 +6,8 @@
 //   cpca_blend          one work-item per row: q[first] + sum_i w_i q[first + 1 + i] over the
 //                       row's cluster (s8 weights: the sum times the row's scale).
 //   cpca_blend_vertices the rows of a vertex subset only (the frame loop's culling).
+//   cpca_view           signal=brdf: one work-item per output value (vertex x, view cell o):
+//                       sum_k Phi[o, k] y[x K + k] over the K blended rows of the vertex.
 //
 // The C++ reference (cpca_relight.cpp) sums in the same order. Host defines: PRT_ID_T (uchar,
 // ushort or uint), PRT_WEIGHT_FORMAT (0 float, 1 IEEE half, 2 s8 codes), PRT_WG_SIZE (64).
@@ -95,4 +97,18 @@ __kernel PRT_WG_ATTR void cpca_blend_vertices(
   const uint row = vertex_ids[item / dim] * dim + item % dim;
   prt_store_rgb3(out, row,
                  cpca_row(row, ids, first, weight_offsets, weights, row_scales, products));
+}
+
+// out[x M + o] = sum_k view[o K + k] terms[x K + k], k ascending.
+__kernel PRT_WG_ATTR void cpca_view(const uint outputs, const uint m, const uint k,
+                                    __global const float* restrict view,
+                                    __global const float* restrict terms,
+                                    __global float* restrict out) {
+  const uint item = get_global_id(0);
+  PRT_GUARD(item, outputs);
+  const uint x = item / m, o = item % m;
+  __global const float* phi = view + (size_t)o * k;
+  float4 acc = (float4)(0.0f);
+  for (uint i = 0; i < k; ++i) acc += phi[i] * prt_load_rgb3(terms, (size_t)x * k + i);
+  prt_store_rgb3(out, item, acc);
 }

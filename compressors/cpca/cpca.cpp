@@ -7,6 +7,8 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/base/named_warning.h"
+#include "prtlab/base/progress.h"
+#include "prtlab/compress/brdf_signal.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/storage/index_section.h"
@@ -18,6 +20,7 @@ namespace {
 struct CpcaParams {
   ClusteredPcaOptions options;
   WeightFormat format = WeightFormat::kFloat32;
+  BrdfSignalParams signal;
 };
 
 RowSet rows_of(const TransferMatrix& t) {
@@ -35,20 +38,30 @@ class CpcaCompressor final : public Compressor {
                                                Progress& progress) const override {
     check_transfer_shape(input, kName);
     const TransferMatrix& t = input.transfer;
-    const RowSet rows = rows_of(t);
+    // The BRDF signal's folded rows, shared with the run's other backends on the same BRDF.
+    std::shared_ptr<const FoldedRows> folded;
+    if (p_.signal.enabled) {
+      Progress fold_progress(fmt::format("{}: folding T with the BRDF", kName),
+                             static_cast<std::int64_t>(t.vertex_count()));
+      folded = brdf_signal_rows(input, p_.signal, fold_progress);
+      log_info("{}: BRDF-weighted signal, {} terms: {} rows, {:.1f} MiB of folded rows", kName,
+               p_.signal.terms, folded->rows(), folded->memory_bytes() / 1048576.0);
+    }
+    const RowSet rows = folded ? folded->row_set() : rows_of(t);
     ClusteredPcaOptions o = p_.options;
     // A small transfer gets what it can hold: one row per cluster at most, and no more vectors
     // than the light has pixels (README, "Parameters").
-    if (static_cast<std::size_t>(o.clusters) > std::max<std::size_t>(1, t.rows()))
+    const std::size_t row_count = rows.rows();
+    if (static_cast<std::size_t>(o.clusters) > std::max<std::size_t>(1, row_count))
       log_warn_named("cpca-clusters-clamped", "{}: clusters = {} for {} rows; using {}", kName,
-                     o.clusters, t.rows(), std::max<std::size_t>(1, t.rows()));
+                     o.clusters, row_count, std::max<std::size_t>(1, row_count));
     if (static_cast<std::size_t>(o.components) > t.cols())
       log_warn_named("cpca-vectors-clamped", "{}: vectors = {} for {} pixels; using {}", kName,
                      o.components, t.cols(), t.cols());
     o.clusters =
-        static_cast<int>(std::min<std::size_t>(o.clusters, std::max<std::size_t>(1, t.rows())));
+        static_cast<int>(std::min<std::size_t>(o.clusters, std::max<std::size_t>(1, row_count)));
     o.components = static_cast<int>(std::min<std::size_t>(o.components, t.cols()));
-    if (t.rows() == 0) throw ParameterError(fmt::format("{}: the transfer has no rows", kName));
+    if (row_count == 0) throw ParameterError(fmt::format("{}: the transfer has no rows", kName));
     // The bar advances by passes: the planned count (a stage that converges early skips ahead).
     const std::int64_t planned =
         2 + (o.method == CpcaMethod::kStatic
@@ -56,7 +69,7 @@ class CpcaCompressor final : public Compressor {
                  : std::int64_t{o.components} * o.iterations_per_component +
                        (o.method == CpcaMethod::kAdaptive ? o.adaptive_iterations : 0));
     std::int64_t passes = 0;
-    const auto rows_total = static_cast<std::int64_t>(t.rows());
+    const auto rows_total = static_cast<std::int64_t>(t.rows());  // the caller's bar counts T's
     o.on_pass = [&](const CpcaPass& pass) {
       log_debug("{}: {} pass {} ({} vectors): squared error {:.6g}, {} rows moved", kName,
                 pass.stage, pass.iteration, pass.components, pass.squared_error, pass.reassigned);
@@ -72,9 +85,17 @@ class CpcaCompressor final : public Compressor {
         kName, model.clusters.size(), model.weight_count(), tm.vq, tm.classify, tm.classify_passes,
         tm.classify > 0 ? tm.classify_flops / tm.classify * 1e-9 : 0.0, tm.pca, tm.pca_updates,
         tm.weights);
-    auto out = std::make_unique<CpcaTransfer>(encode(model, rows, t.vertex_count(), t.local_count(),
-                                                     static_cast<int>(t.cols()), p_.options.method,
-                                                     p_.format));
+    CpcaArrays a = encode(model, rows, t.vertex_count(), t.local_count(),
+                          static_cast<int>(t.cols()), p_.options.method, p_.format);
+    if (folded) {
+      const Eigen::MatrixXd& phi = folded->fold.view;
+      a.view_terms = p_.signal.terms;
+      a.view.resize(static_cast<std::size_t>(phi.size()));
+      for (Eigen::Index i = 0; i < phi.rows(); ++i)
+        for (Eigen::Index k = 0; k < phi.cols(); ++k)
+          a.view[static_cast<std::size_t>(i * phi.cols() + k)] = static_cast<float>(phi(i, k));
+    }
+    auto out = std::make_unique<CpcaTransfer>(std::move(a));
     progress.finish();
     return out;
   }
@@ -248,9 +269,9 @@ CpcaArrays encode(const ClusteredPca& model, const RowSet& rows, std::size_t ver
 StorageReport CpcaTransfer::storage() const {
   StorageReport r;
   const std::uint64_t rows = a_.rows();
-  r.components.push_back(
-      {"cluster_ids", rows * a_.id_bytes(),
-       fmt::format("u{} per row (vertex * M + cell): its cluster", 8 * a_.id_bytes())});
+  r.components.push_back({"cluster_ids", rows * a_.id_bytes(),
+                          fmt::format("u{} per row (vertex * {}): its cluster", 8 * a_.id_bytes(),
+                                      a_.view_terms > 0 ? "K + BRDF term" : "M + cell")});
   const std::uint64_t w = a_.weight_values.size();
   switch (a_.format) {
     case WeightFormat::kFloat32:
@@ -274,6 +295,9 @@ StorageReport CpcaTransfer::storage() const {
     r.components.push_back(
         {"vector_counts", a_.clusters() * std::uint64_t{2}, "u16 per cluster: its k_c (adaptive)"});
   }
+  if (a_.view_terms > 0)
+    r.components.push_back({"view", a_.view.size() * std::uint64_t{4},
+                            "f32 M x K: the BRDF's view factor Phi (signal=brdf)"});
   return r;
 }
 
@@ -281,7 +305,8 @@ double CpcaTransfer::flops_per_relight() const {
   const double per_rep = 2.0 * a_.pixel_count;
   const double blend = 2.0 * static_cast<double>(a_.weight_values.size()) +
                        (a_.format == WeightFormat::kS8 ? static_cast<double>(a_.rows()) : 0.0);
-  return per_rep * static_cast<double>(a_.rep_count()) + blend;
+  const double view = 2.0 * static_cast<double>(a_.vertices) * static_cast<double>(a_.view.size());
+  return per_rep * static_cast<double>(a_.rep_count()) + blend + view;
 }
 
 LightCoeffs CpcaTransfer::project_light(const Cubemap& radiance) const {
@@ -292,7 +317,13 @@ void CpcaTransfer::relight(const LightCoeffs& light, LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
   out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   const std::vector<Rgb> q = representative_dots(a_, light.values);
-  blend_rows(a_, q, out.values);
+  if (a_.view_terms == 0) {
+    blend_rows(a_, q, out.values);
+    return;
+  }
+  std::vector<Rgb> terms(a_.rows());
+  blend_rows(a_, q, terms);
+  apply_view(a_, terms, out.values);
 }
 
 void CpcaTransfer::relight_vertices(const LightCoeffs& light,
@@ -300,6 +331,7 @@ void CpcaTransfer::relight_vertices(const LightCoeffs& light,
                                     LocalRadiance& out) const {
   check_pixel_light(light, static_cast<std::size_t>(a_.pixel_count), kName);
   check_vertex_subset(vertices, a_.vertices, kName);
+  if (a_.view_terms > 0) return relight(light, out);
   out.ensure_shape(RadianceBasis::kPixel, a_.local_count, a_.vertices);
   const std::vector<Rgb> q = representative_dots(a_, light.values);
   blend_vertex_rows(a_, q, vertices, out.values);
@@ -318,6 +350,8 @@ void CpcaTransfer::save(ArchiveWriter& archive) const {
   archive.add_meta("method", std::string(to_string(a_.method)));
   archive.add_meta("weights", std::string(to_string(a_.format)));
   archive.add_meta("frobenius_error", a_.frobenius_error);
+  archive.add_meta("view_terms", a_.view_terms);
+  if (a_.view_terms > 0) archive.add_section("view", a_.view);
   std::vector<std::uint16_t> counts(a_.clusters());
   for (std::size_t c = 0; c < a_.clusters(); ++c)
     counts[c] = static_cast<std::uint16_t>(a_.vectors_of(c));
@@ -352,6 +386,7 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
   a.pixel_count = r.meta_value<int>("pixel_count");
   const auto clusters = r.meta_value<std::size_t>("clusters");
   a.frobenius_error = r.meta_value<double>("frobenius_error");
+  a.view_terms = r.meta_value<int>("view_terms");
   try {
     a.method = method_from(r.meta_value<std::string>("method"));
     a.format = weight_format_from(r.meta_value<std::string>("weights"));
@@ -361,6 +396,8 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
   if (a.local_count <= 0 || a.pixel_count <= 0 || clusters == 0)
     throw fail(fmt::format("bad shape: M = {}, N = {}, {} clusters", a.local_count, a.pixel_count,
                            clusters));
+  if (a.view_terms < 0 || a.view_terms > a.local_count)
+    throw fail(fmt::format("{} BRDF terms for M = {} (0 to M)", a.view_terms, a.local_count));
   if (!(std::isfinite(a.frobenius_error) && a.frobenius_error >= 0))
     throw fail("the Frobenius error is not a finite non-negative number");
   // Sizes the kernels index with u32, checked before anything is multiplied or allocated.
@@ -368,7 +405,9 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
   if (a.vertices == 0 || a.vertices > kU32 / static_cast<std::uint64_t>(a.local_count))
     throw fail(fmt::format("{} vertices x M = {} rows do not fit the relight's u32 row index",
                            a.vertices, a.local_count));
-  const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.local_count);
+  const std::uint64_t rows = a.vertices * static_cast<std::uint64_t>(a.rows_per_vertex());
+  if (a.view_terms > 0)
+    a.view = r.section<float>("view", static_cast<std::uint64_t>(a.local_count) * a.view_terms);
   if (clusters > rows) throw fail(fmt::format("{} clusters for {} rows", clusters, rows));
   const auto counts = r.section<std::uint16_t>("vector_counts", clusters);
   a.first.assign(clusters + 1, 0);
@@ -401,8 +440,9 @@ std::unique_ptr<CompressedTransfer> CpcaTransfer::load(const ArchiveReader& r) {
   const auto finite = [](float v) { return std::isfinite(v); };
   if (!std::all_of(a.reps.begin(), a.reps.end(), finite) ||
       !std::all_of(a.weights32.begin(), a.weights32.end(), finite) ||
-      !std::all_of(a.row_scales.begin(), a.row_scales.end(), finite))
-    throw fail("a representative, weight or row scale is not finite");
+      !std::all_of(a.row_scales.begin(), a.row_scales.end(), finite) ||
+      !std::all_of(a.view.begin(), a.view.end(), finite))
+    throw fail("a representative, weight, row scale or view factor is not finite");
   try {
     derive_row_layout(a);
   } catch (const ParameterError& e) {
@@ -477,6 +517,7 @@ CompressorEntry registry_entry() {
   };
   e.size_knob = SizeKnob{"vectors", SizeKnob::Direction::kLargerIsMoreStorage, 1.0, 16.0,
                          SizeKnob::Scale::kLinear};
+  e.inputs.brdf_signal = true;
   e.lossless = false;
   e.cost_hint_seconds = 59;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& p) -> std::unique_ptr<Compressor> {
@@ -491,6 +532,7 @@ CompressorEntry registry_entry() {
     c.options.adaptive_iterations = static_cast<int>(p.get_int("adaptive_iterations"));
     c.options.adaptive_max_components = static_cast<int>(p.get_int("adaptive_max_vectors"));
     c.options.seed = static_cast<std::uint64_t>(p.get_int("seed"));
+    c.signal = brdf_signal_params(p);
     c.format = p.get_enum<WeightFormat>("weights", {{"float32", WeightFormat::kFloat32},
                                                     {"float16", WeightFormat::kFloat16},
                                                     {"s8", WeightFormat::kS8}});
@@ -501,7 +543,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<CpcaCompressor>(std::move(c));
   };
   e.load = &CpcaTransfer::load;
-  e.version = 3;
+  e.version = 4;
   e.published = {
       {"chair",
        {{"clusters", "32"}, {"vectors", "8"}},

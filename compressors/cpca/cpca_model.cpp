@@ -1,7 +1,8 @@
 // The stored model of backend `cpca` (stored_model.h): every row of T~ rebuilt in the pixel
 // basis from its cluster's representatives and its weights as stored, then dotted with the
-// light, in double. The relight associates the other way (the light's dot with each
-// representative first, then the per-row blend), so the two share no code.
+// light, in double (signal=brdf: then the K rows of each vertex through the stored Phi). The
+// relight associates the other way (the light's dot with each representative first, then the
+// per-row blend), so the two share no code.
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,9 +25,9 @@ ModelRadiance CpcaTransfer::model_radiance(const Cubemap& radiance) const {
     light[k] = Vec3d(radiance.radiance[k]) * omega[k];
     magnitude[k] = glm::abs(light[k]);
   }
-  ModelRadiance out;
-  out.values.assign(a_.rows(), Vec3d(0.0));
-  out.magnitude.assign(a_.rows(), Vec3d(0.0));
+  ModelRadiance rows;
+  rows.values.assign(a_.rows(), Vec3d(0.0));
+  rows.magnitude.assign(a_.rows(), Vec3d(0.0));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a_.rows(), 256), [&](const auto& r) {
     std::vector<double> row(n), size(n);
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -51,10 +52,24 @@ ModelRadiance CpcaTransfer::model_radiance(const Cubemap& radiance) const {
         value += row[j] * light[j];
         bound += size[j] * magnitude[j];
       }
-      out.values[i] = value;
-      out.magnitude[i] = bound;
+      rows.values[i] = value;
+      rows.magnitude[i] = bound;
     }
   });
+  if (a_.view_terms == 0) return rows;
+  // The BRDF signal: the K rows of a vertex through Phi, |Phi| for the rounding bound.
+  const auto m = static_cast<std::size_t>(a_.local_count);
+  const auto k = static_cast<std::size_t>(a_.view_terms);
+  ModelRadiance out;
+  out.values.assign(a_.vertices * m, Vec3d(0.0));
+  out.magnitude.assign(a_.vertices * m, Vec3d(0.0));
+  for (std::size_t x = 0; x < a_.vertices; ++x)
+    for (std::size_t o = 0; o < m; ++o)
+      for (std::size_t i = 0; i < k; ++i) {
+        const double phi = a_.view[o * k + i];
+        out.values[x * m + o] += phi * rows.values[x * k + i];
+        out.magnitude[x * m + o] += std::abs(phi) * rows.magnitude[x * k + i];
+      }
   return out;
 }
 

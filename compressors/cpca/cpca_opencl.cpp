@@ -29,6 +29,7 @@ class CpcaDevice final : public DeviceRelighter {
         reps_(a.rep_count()),
         cols_(static_cast<std::size_t>(a.pixel_count)),
         dim_(a.local_count),
+        terms_(a.view_terms),
         vertices_(a.vertices),
         light_host_(cols_) {
     if (rows_ > std::numeric_limits<std::uint32_t>::max() ||
@@ -45,6 +46,7 @@ class CpcaDevice final : public DeviceRelighter {
     dots_ = make_kernel(program, "cpca_dots");
     blend_ = make_kernel(program, "cpca_blend");
     blend_vertices_ = make_kernel(program, "cpca_blend_vertices");
+    view_ = make_kernel(program, "cpca_view");
 
     switch (a.id_bytes()) {
       case 1: {
@@ -90,16 +92,32 @@ class CpcaDevice final : public DeviceRelighter {
     representatives_ = upload(ctx, std::span<const float>(a.reps), "cpca representatives");
     products_ = make_buffer(ctx, reps_ * sizeof(cl_float4), CL_MEM_READ_WRITE, "cpca products");
     light_ = make_buffer(ctx, cols_ * sizeof(cl_float4), CL_MEM_READ_ONLY, "cpca light");
-    out_ = make_buffer(ctx, rows_ * sizeof(Rgb), CL_MEM_READ_WRITE, "cpca local radiance");
+    outputs_ = vertices_ * static_cast<std::size_t>(dim_);
+    out_ = make_buffer(ctx, outputs_ * sizeof(Rgb), CL_MEM_READ_WRITE, "cpca local radiance");
     set_args(dots_, static_cast<cl_uint>(reps_), static_cast<cl_uint>(cols_), representatives_,
              light_, products_);
-    set_args(blend_, static_cast<cl_uint>(rows_), ids_, first_, offsets_, weights_, scales_,
-             products_, out_);
+    if (terms_ > 0) {
+      // The BRDF signal: the rows blend into the K terms of each vertex, which Phi maps to the
+      // output.
+      if (outputs_ > std::numeric_limits<std::uint32_t>::max())
+        throw ParameterError(
+            fmt::format("{}: {} outputs exceed the kernels' u32 indices", kName, outputs_));
+      view_buffer_ = upload(ctx, std::span<const float>(a.view), "cpca view factor");
+      terms_buffer_ = make_buffer(ctx, rows_ * sizeof(Rgb), CL_MEM_READ_WRITE, "cpca BRDF terms");
+      set_args(blend_, static_cast<cl_uint>(rows_), ids_, first_, offsets_, weights_, scales_,
+               products_, terms_buffer_);
+      set_args(view_, static_cast<cl_uint>(outputs_), static_cast<cl_uint>(dim_),
+               static_cast<cl_uint>(terms_), view_buffer_, terms_buffer_, out_);
+    } else {
+      set_args(blend_, static_cast<cl_uint>(rows_), ids_, first_, offsets_, weights_, scales_,
+               products_, out_);
+    }
     bytes_ = buffer_bytes({&ids_, &first_, &offsets_, &weights_, &scales_, &representatives_,
                            &products_, &light_, &out_});
+    if (terms_ > 0) bytes_ += buffer_bytes({&view_buffer_, &terms_buffer_});
   }
 
-  bool supports_vertex_subset() const override { return true; }
+  bool supports_vertex_subset() const override { return terms_ == 0; }
 
   void set_vertex_subset(std::span<const std::uint32_t> vertices) override {
     check_vertex_subset(vertices, vertices_, kName);
@@ -107,6 +125,7 @@ class CpcaDevice final : public DeviceRelighter {
   }
 
   double relight_subset_on_device(const LightCoeffs& light) override {
+    if (terms_ > 0) return relight_on_device(light);
     const double ms = products(light);
     const std::size_t subset_rows = subset_.size() * static_cast<std::size_t>(dim_);
     if (subset_rows == 0) return ms;
@@ -122,7 +141,13 @@ class CpcaDevice final : public DeviceRelighter {
     const double ms = products(light);
     if (rows_ == 0) return ms;
     cl::Event event = launch(ctx_, "cpca.blend", blend_, LaunchRange::linear(rows_, kWorkGroup));
-    return ms + event_milliseconds(event, ctx_.info().device_name, "timing of kernel cpca.blend");
+    double total =
+        ms + event_milliseconds(event, ctx_.info().device_name, "timing of kernel cpca.blend");
+    if (terms_ > 0) {
+      cl::Event view = launch(ctx_, "cpca.view", view_, LaunchRange::linear(outputs_, kWorkGroup));
+      total += event_milliseconds(view, ctx_.info().device_name, "timing of kernel cpca.view");
+    }
+    return total;
   }
 
   double relight(const LightCoeffs& light, LocalRadiance& out) override {
@@ -149,10 +174,13 @@ class CpcaDevice final : public DeviceRelighter {
   ClContext& ctx_;
   std::size_t rows_, reps_, cols_;
   int dim_;
+  int terms_;
   std::size_t vertices_;
+  std::size_t outputs_ = 0;
   std::vector<cl_float4> light_host_;
-  cl::Kernel dots_, blend_, blend_vertices_;
+  cl::Kernel dots_, blend_, blend_vertices_, view_;
   cl::Buffer ids_, first_, offsets_, weights_, scales_, representatives_, products_, light_, out_;
+  cl::Buffer view_buffer_, terms_buffer_;
   std::uint64_t bytes_ = 0;
   DeviceIdList subset_{"cpca vertex subset"};
 };

@@ -68,6 +68,22 @@ void blend_rows(const CpcaArrays& a, std::span<const Rgb> q, std::span<Rgb> out)
   });
 }
 
+void apply_view(const CpcaArrays& a, std::span<const Rgb> terms, std::span<Rgb> out) {
+  const auto m = static_cast<std::size_t>(a.local_count);
+  const auto k = static_cast<std::size_t>(a.view_terms);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.vertices, 64), [&](const auto& r) {
+    for (std::size_t x = r.begin(); x != r.end(); ++x) {
+      const Rgb* y = terms.data() + x * k;
+      for (std::size_t o = 0; o < m; ++o) {
+        const float* phi = a.view.data() + o * k;
+        Float4 acc{};
+        for (std::size_t i = 0; i < k; ++i) acc += phi[i] * to_float4(y[i]);
+        out[x * m + o] = Rgb(acc[0], acc[1], acc[2]);
+      }
+    }
+  });
+}
+
 void blend_vertex_rows(const CpcaArrays& a, std::span<const Rgb> q,
                        std::span<const std::uint32_t> vertices, std::span<Rgb> out) {
   const std::vector<Float4> q4 = as_float4(q);

@@ -19,6 +19,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/base/named_warning.h"
+#include "prtlab/compress/brdf_signal.h"
 #include "prtlab/lighting/srbf_light.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/sphere/icosphere.h"
@@ -571,47 +572,15 @@ CompressorEntry registry_entry() {
        1000.0,
        {},
        "alternating L-BFGS-B rounds of the scattered fit"},
-      {"signal",
-       ParamType::kEnum,
-       "cells",
-       std::nullopt,
-       std::nullopt,
-       {"cells", "brdf"},
-       "the view mode: T's M local cells (relight: local radiance), or the paper's BRDF-weighted "
-       "transfer in brdf_terms Cook-Torrance terms (relight: outgoing radiance towards the cells)"},
-      {"brdf_terms",
-       ParamType::kInt,
-       "16",
-       1.0,
-       4096.0,
-       {},
-       "K, separable BRDF terms of the brdf signal (the paper: 16; at most M)"},
-      {"brdf_diffuse",
-       ParamType::kReal,
-       "0.3",
-       0.0,
-       1.0,
-       {},
-       "Cook-Torrance kd, the Lambertian share of the brdf signal's BRDF"},
-      {"brdf_roughness",
-       ParamType::kReal,
-       "0.3",
-       0.01,
-       10.0,
-       {},
-       "Cook-Torrance Beckmann roughness m of the brdf signal's BRDF"},
-      {"brdf_fresnel0",
-       ParamType::kReal,
-       "0.5",
-       0.0,
-       1.0,
-       {},
-       "Cook-Torrance Schlick F0 of the brdf signal's BRDF"},
   };
   // The light rank, not the vertex rank: the light mode has to hold a cluster's disjoint cell
   // patches, and it is what limits the error (results/srbf-cta/README.md, "Ranks").
   e.size_knob = SizeKnob{"rank_light", SizeKnob::Direction::kLargerIsMoreStorage, 4.0, 320.0,
                          SizeKnob::Scale::kLinear};
+  // The view mode's signal and its parameters (core compress/brdf_signal.h). The folded rows
+  // themselves are not read: the SRBF projection folds each vertex's right-hand sides as it
+  // goes, which a 48k-vertex scene needs (its folded rows would take 14 GB).
+  e.inputs.brdf_signal = true;
   e.lossless = false;
   e.cost_hint_seconds = 1600;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& ps) -> std::unique_ptr<Compressor> {
@@ -637,12 +606,10 @@ CompressorEntry registry_entry() {
                                                {"pixel", LightMode::kPixel}});
     p.light_srbfs = static_cast<int>(ps.get_int("light_srbfs"));
     p.light_rounds = static_cast<int>(ps.get_int("light_rounds"));
-    p.signal = ps.get_enum<Signal>("signal", {{"cells", Signal::kCells}, {"brdf", Signal::kBrdf}});
-    p.brdf_terms = static_cast<int>(ps.get_int("brdf_terms"));
-    p.brdf.diffuse = ps.get_real("brdf_diffuse");
-    p.brdf.roughness = ps.get_real("brdf_roughness");
-    p.brdf.fresnel0 = ps.get_real("brdf_fresnel0");
-    p.brdf.validate();
+    const BrdfSignalParams signal = brdf_signal_params(ps);
+    p.signal = signal.enabled ? Signal::kBrdf : Signal::kCells;
+    p.brdf_terms = signal.terms;
+    p.brdf = signal.brdf;
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;

@@ -6,6 +6,7 @@
 
 #include "prtlab/base/error.h"
 #include "prtlab/btf/scene_btfs.h"
+#include "prtlab/compress/brdf_signal.h"
 
 namespace prt {
 
@@ -15,6 +16,7 @@ BackendInputs union_of(std::span<const BackendInputs> needs) {
     u.sh_order = std::max(u.sh_order, n.sh_order);
     u.mesh = u.mesh || n.mesh;
     u.btfs = u.btfs || n.btfs;
+    u.brdf_signal = u.brdf_signal || n.brdf_signal;
   }
   return u;
 }
@@ -24,6 +26,7 @@ std::string describe(const BackendInputs& n) {
   if (n.sh_order > 0) s += fmt::format(", SH order {}", n.sh_order);
   if (n.mesh) s += ", mesh";
   if (n.btfs) s += ", BTFs";
+  if (n.brdf_signal) s += ", BRDF-weighted signal";
   return s;
 }
 
@@ -47,6 +50,7 @@ PreparedScene prepare_scene(const SceneDesc& desc, const BackendInputs& needs, S
           desc.name, scene.mesh.positions.size(), p.transfer.result.transfer.vertex_count()));
     p.mesh = std::move(scene.mesh);
   }
+  if (needs.brdf_signal) p.brdf_signal = std::make_shared<BrdfSignalSource>();
   if (needs.btfs)
     p.btfs = scene_part_btfs(desc, options.btf, cache, options.show_progress, &p.btf_cache_hits);
   return p;
@@ -72,13 +76,15 @@ TransferInput PreparedScene::input(const CompressorEntry& entry) const {
     throw missing(fmt::format("the SH transfer of order {}", entry.inputs.sh_order));
   if (entry.inputs.mesh && !mesh) throw missing("the mesh");
   if (entry.inputs.btfs && btfs.empty()) throw missing("the BTFs");
+  if (entry.inputs.brdf_signal && !brdf_signal) throw missing("the BRDF-weighted signal");
   return TransferInput{transfer.result.transfer,
                        entry.inputs.sh_order > 0 ? &*sh : nullptr,
                        cubemap,
                        grid,
                        entry.inputs.mesh ? &*mesh : nullptr,
                        entry.inputs.btfs ? std::span<const std::shared_ptr<const Btf>>(btfs)
-                                         : std::span<const std::shared_ptr<const Btf>>()};
+                                         : std::span<const std::shared_ptr<const Btf>>(),
+                       entry.inputs.brdf_signal ? brdf_signal.get() : nullptr};
 }
 
 }  // namespace prt

@@ -5,6 +5,7 @@
 #include "compress/registry_entry_check.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/compress/brdf_signal.h"
 #include "prtlab/storage/archive.h"
 
 namespace prt {
@@ -34,6 +35,12 @@ void CompressorRegistry::add(CompressorEntry entry) {
   if (entries_.contains(entry.name))
     throw Error(fmt::format("compressor registry: '{}' is registered twice ({} and {})", entry.name,
                             entries_.at(entry.name).origin, entry.origin));
+  // A declared input that brings its parameters (brdf_signal.h): every backend on it reads the
+  // same keys.
+  if (entry.inputs.brdf_signal) {
+    const auto specs = brdf_signal_param_specs();
+    entry.params.insert(entry.params.end(), specs.begin(), specs.end());
+  }
   // Fail at registration, not at first use, when a backend's own specs are inconsistent.
   check_entry_params("compressor", entry.name, entry.params, entry.device_params,
                      entry.light_params);

@@ -1,8 +1,8 @@
 #pragma once
 // One function prepares, for one scene, what a set of backends declare they need
 // (CompressorEntry::inputs): T always, the SH transfer at the largest order asked, the mesh,
-// the BTFs. Every stage goes through the stage cache. Callers (the CLI, the experiments, the
-// benches) list backends and never special-case one.
+// the BTFs, the BRDF-weighted signal (folded on first use). Every stage goes through the stage
+// cache. Callers (the CLI, the experiments, the benches) list backends and never special-case one.
 #include <memory>
 #include <optional>
 #include <span>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "prtlab/btf/btf_generator.h"
+#include "prtlab/compress/brdf_signal.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/geometry/scene.h"
 #include "prtlab/transfer/scene_transfer.h"
@@ -31,6 +32,8 @@ struct PreparedScene {
   std::optional<Mesh> mesh;
   std::vector<std::shared_ptr<const Btf>> btfs;
   int btf_cache_hits = 0;
+  /// When a backend asks for the BRDF-weighted signal: the folded rows, built on first use.
+  std::shared_ptr<BrdfSignalSource> brdf_signal;
 
   /// The input of a backend with entry `entry`: ParameterError naming the backend and the
   /// missing input when this preparation did not include what the entry declares.

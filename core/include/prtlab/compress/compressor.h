@@ -37,6 +37,7 @@ class ArchiveWriter;
 class ArchiveReader;
 class ClContext;
 class ParamSet;
+class BrdfSignalSource;
 
 /// What a compressor sees: the exact transfer, the bases it lives in, and whatever else its
 /// registry entry declares it needs (CompressorEntry::inputs; prepare_scene() in
@@ -49,6 +50,9 @@ struct TransferInput {
   const Mesh* mesh = nullptr;      ///< the scene's mesh with parts and frames, when asked for
   /// The BTF of every mesh part (part order), when asked for.
   std::span<const std::shared_ptr<const Btf>> btfs = {};
+  /// Where the BRDF-weighted signal of T comes from, when asked for (brdf_signal.h; null: a
+  /// backend builds it through brdf_signal_rows() itself).
+  BrdfSignalSource* brdf_signal = nullptr;
 };
 
 /// Light in a backend's basis: `basis` names it ("pixel", "haar", "sh5", "srbf642", ...).

@@ -30,6 +30,9 @@ struct BackendInputs {
   int sh_order = 0;   ///< the SH transfer of this order (n^2 x n^2 per vertex); 0: none
   bool mesh = false;  ///< the scene's mesh (parts, frames, UVs)
   bool btfs = false;  ///< the scene's BTFs, one per part
+  /// The BRDF-weighted signal (brdf_signal.h): the entry gets its parameters at registration
+  /// and TransferInput::brdf_signal, which folds T once per BRDF for every backend of a run.
+  bool brdf_signal = false;
 };
 
 /// A number a paper publishes for a backend on one of its scenes at given parameters, printed
