@@ -22,6 +22,7 @@
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/geometry/scene.h"
 #include "prtlab/image/image_io.h"
+#include "prtlab/image/ssim.h"
 #include "prtlab/render/factored_material.h"
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/render/image_error.h"
@@ -241,6 +242,41 @@ std::string mb(double bytes) {
   return fmt::format("{:.3f}", bytes / 1e6);
 }
 
+json finite_or_null(double x) {
+  return std::isfinite(x) ? json(x) : json(nullptr);
+}
+
+// A measure of a row or image as text: "-" where it is absent or undefined (null).
+std::string number(const json& j, const std::string& key, const char* format) {
+  if (!j.contains(key) || !j.at(key).is_number()) return "-";
+  return fmt::format(fmt::runtime(format), j.at(key).get<double>());
+}
+
+// What each error column means (material_error.h, image/ssim.h), for the README.
+const char* kErrorColumns =
+    "Errors of the material against the full BTF, over all texels, views, lights and "
+    "channels (`core/include/prtlab/compress/material_error.h`), with b the full BTF's value "
+    "and d the material's minus b:\n\n"
+    "- `rel. L2`: sqrt(sum d^2) / sqrt(sum b^2). The largest values (highlights) dominate it.\n"
+    "- `avg. rel. (Suykens)`: the measure of Suykens et al. 2003 (section 4.4, \"average "
+    "relative error\", \"up to 100%\" on their checker): the mean of |d| / b over every sample "
+    "with b != 0, unguarded as the paper describes it (samples with b = 0 are left out; their "
+    "count is `zero_samples` in table.csv). `worst ABRDF` is the largest such mean of one ABRDF "
+    "(texel), the paper's \"up to\" read as a maximum over ABRDFs.\n"
+    "- `avg. rel. floored`: the same with the denominator max(b, 0.01 m), m the ABRDF "
+    "channel's largest value (prtlab's guard, not the paper's): shadowed samples cannot "
+    "dominate.\n"
+    "- `cos L2`: rel. L2 with each light bin's squared error weighted by its mean cosine c_j. "
+    "b already holds c_j once (docs/btf.md), so this counts the cosine twice; it shows how much "
+    "of rel. L2 comes from grazing lights.\n"
+    "- `white-light L2`: per texel, view and channel, the sum over the light bins of d and of "
+    "b (what the material returns under a uniform white environment: every bin has the same "
+    "solid angle and b holds the cosine, so this is the rendering sum's own weighting), then "
+    "the relative L2 of those sums: errors of opposite sign within one view cancel as in a "
+    "rendered pixel.\n\n"
+    "Average absolute error (`average_abs`), the largest absolute error (`max_abs`) and "
+    "`zero_samples` are in table.csv and result.json.\n\n";
+
 }  // namespace
 
 std::vector<std::string> material_table_variants(const fs::path& file) {
@@ -291,20 +327,28 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
       auto material = compress_material(m.backend, m.params, btf);
       const double seconds = seconds_since(t0);
       const MaterialError err = material_error(*material, *btf);
-      json row = {{"btf", name},
-                  {"resolution", btf->resolution()},
-                  {"view_side", btf->view_side()},
-                  {"light_side", btf->light_side()},
-                  {"samples_per_abrdf", btf->view_count() * btf->light_count()},
-                  {"btf_bytes", btf->bytes()},
-                  {"label", m.label},
-                  {"backend", m.backend},
-                  {"params", m.params},
-                  {"compress_seconds", seconds},
-                  {"stored_bytes", material->storage().total_bytes()},
-                  {"rel_l2", err.relative_l2},
-                  {"max_abs", err.max_abs},
-                  {"flops_per_pixel", material->flops_per_pixel()}};
+      json row = {
+          {"btf", name},
+          {"resolution", btf->resolution()},
+          {"view_side", btf->view_side()},
+          {"light_side", btf->light_side()},
+          {"samples_per_abrdf", btf->view_count() * btf->light_count()},
+          {"btf_bytes", btf->bytes()},
+          {"label", m.label},
+          {"backend", m.backend},
+          {"params", m.params},
+          {"compress_seconds", seconds},
+          {"stored_bytes", material->storage().total_bytes()},
+          {"rel_l2", err.relative_l2},
+          {"max_abs", err.max_abs},
+          {"average_relative", finite_or_null(err.average_relative)},
+          {"average_relative_worst_abrdf", finite_or_null(err.average_relative_worst_abrdf)},
+          {"average_relative_floored", finite_or_null(err.average_relative_floored)},
+          {"average_abs", err.average_abs},
+          {"zero_samples", err.zero_samples},
+          {"cosine_l2", finite_or_null(err.cosine_l2)},
+          {"white_light_l2", finite_or_null(err.white_light_l2)},
+          {"flops_per_pixel", material->flops_per_pixel()}};
       if (const auto* f = dynamic_cast<const FactoredMaterial*>(material.get())) {
         const json& tm = f->state().timings;
         const double fs_ = tm.value("factorization_seconds", 0.0);
@@ -357,6 +401,7 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
     ToneMap tm;
     tm.auto_exposure = false;
     tm.exposure = exposure_of(full, mask);
+    const RgbImage full_display = tone_mapped(full, tm);
     const std::string stem = spec.scene + "-" + spec.image_btf;
     write_png(full, folder / "images" / (stem + "-full.png"), tm);
     images.push_back({{"label", "full"}, {"file", "images/" + stem + "-full.png"}});
@@ -366,10 +411,13 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
       const std::string f = stem + "-" + m.label + ".png", e = stem + "-" + m.label + "-error.png";
       write_png(img, folder / "images" / f, tm);
       write_false_colour_png(error_false_colour(img, full, mask), folder / "images" / e);
+      const RgbImage display = tone_mapped(img, tm);
       images.push_back({{"label", m.label},
                         {"file", "images/" + f},
                         {"error_map", "images/" + e},
-                        {"image_error", to_json(image_error(img, full, mask))}});
+                        {"image_error", to_json(image_error(img, full, mask))},
+                        {"display_error", to_json(image_error(display, full_display, mask))},
+                        {"ssim", ssim(display, full_display, mask)}});
     }
   }
 
@@ -395,20 +443,40 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
   std::string csv =
       "btf,resolution,view_side,light_side,samples_per_abrdf,label,backend,params,"
       "factorization_ms_per_abrdf,clustering_seconds,compress_seconds,btf_mb,factored_mb,"
-      "stored_mb,rel_l2,max_abs\n";
+      "stored_mb,rel_l2,max_abs,average_relative,average_relative_worst_abrdf,"
+      "average_relative_floored,average_abs,zero_samples,cosine_l2,white_light_l2,image_rel_l2,"
+      "image_ssim,image_display_rmse\n";
+  // The rendered image's measures, on the rows of the image BTF.
+  std::map<std::string, const json*> image_of;
+  for (const json& i : images) image_of[i.at("label").get<std::string>()] = &i;
   for (const json& r : rows) {
     std::string params;
     for (const auto& [k, v] : r.at("params").items())
       params += (params.empty() ? "" : " ") + k + "=" + v.get<std::string>();
+    std::string image_cols = ",,";
+    if (r.at("btf").get<std::string>() == spec.image_btf &&
+        image_of.count(r.at("label").get<std::string>())) {
+      const json& i = *image_of.at(r.at("label").get<std::string>());
+      image_cols =
+          fmt::format("{},{},{}", number(i.at("image_error"), "relative_l2", "{:.6g}"),
+                      number(i, "ssim", "{:.6g}"), number(i.at("display_error"), "rmse", "{:.6g}"));
+    }
+    const auto g = [&](const char* key) {
+      const std::string t = number(r, key, "{:.6g}");
+      return t == "-" ? std::string() : t;
+    };
     csv += fmt::format(
-        "{},{},{},{},{},{},{},{},{:.4f},{:.3f},{:.3f},{},{},{},{:.6g},{:.6g}\n",
+        "{},{},{},{},{},{},{},{},{:.4f},{:.3f},{:.3f},{},{},{},{:.6g},{:.6g},{},{},{},{},{},{},{},"
+        "{}\n",
         r.at("btf").get<std::string>(), r.at("resolution").get<int>(), r.at("view_side").get<int>(),
         r.at("light_side").get<int>(), r.at("samples_per_abrdf").get<int>(),
         r.at("label").get<std::string>(), r.at("backend").get<std::string>(), params,
         r.value("factorization_ms_per_abrdf", 0.0), r.value("clustering_seconds", 0.0),
         r.at("compress_seconds").get<double>(), mb(r.at("btf_bytes").get<double>()),
         mb(r.value("factored_bytes", 0.0)), mb(r.at("stored_bytes").get<double>()),
-        r.at("rel_l2").get<double>(), r.at("max_abs").get<double>());
+        r.at("rel_l2").get<double>(), r.at("max_abs").get<double>(), g("average_relative"),
+        g("average_relative_worst_abrdf"), g("average_relative_floored"), g("average_abs"),
+        r.at("zero_samples").get<std::uint64_t>(), g("cosine_l2"), g("white_light_l2"), image_cols);
   }
   write_text_atomically(folder / "table.csv", "# " + prov.summary() + "\n" + csv);
 
@@ -418,21 +486,26 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
       "BTFs of {0} x {0} texels (ABRDFs), {1} x {1} view and {2} x {2} light samples ({3} "
       "samples per ABRDF), generated by prtlab. Times are wall-clock on {4} threads; "
       "`factorisation ms / ABRDF` is the whole factorisation's time divided by the ABRDF count "
-      "(single-thread times: `bench/material_factorization_bench`). Error: relative L2 of the "
-      "material against the full BTF over all texels, views, lights and channels.\n\n",
+      "(single-thread times: `bench/material_factorization_bench`).\n\n",
       spec.resolution, spec.view_side, spec.light_side,
       spec.view_side * spec.view_side * spec.light_side * spec.light_side,
       tbb::info::default_concurrency());
+  md += kErrorColumns;
   md +=
       "| BTF | material | factorisation ms / ABRDF | clustering s | BTF MB | factored MB | stored "
-      "MB | rel. L2 error |\n|---|---|---|---|---|---|---|---|\n";
+      "MB | rel. L2 | avg. rel. (Suykens) | worst ABRDF | avg. rel. floored | cos L2 | "
+      "white-light L2 |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const json& r : rows)
-    md +=
-        fmt::format("| {} | {} | {:.3f} | {:.2f} | {} | {} | {} | {:.4f} |\n",
-                    r.at("btf").get<std::string>(), r.at("label").get<std::string>(),
-                    r.value("factorization_ms_per_abrdf", 0.0), r.value("clustering_seconds", 0.0),
-                    mb(r.at("btf_bytes").get<double>()), mb(r.value("factored_bytes", 0.0)),
-                    mb(r.at("stored_bytes").get<double>()), r.at("rel_l2").get<double>());
+    md += fmt::format(
+        "| {} | {} | {:.3f} | {:.2f} | {} | {} | {} | {:.4f} | {} | {} | {} | {} | {} |\n",
+        r.at("btf").get<std::string>(), r.at("label").get<std::string>(),
+        r.value("factorization_ms_per_abrdf", 0.0), r.value("clustering_seconds", 0.0),
+        mb(r.at("btf_bytes").get<double>()), mb(r.value("factored_bytes", 0.0)),
+        mb(r.at("stored_bytes").get<double>()), r.at("rel_l2").get<double>(),
+        number(r, "average_relative", "{:.4f}"),
+        number(r, "average_relative_worst_abrdf", "{:.4f}"),
+        number(r, "average_relative_floored", "{:.4f}"), number(r, "cosine_l2", "{:.4f}"),
+        number(r, "white_light_l2", "{:.4f}"));
   if (!spec.paper.empty()) {
     md += fmt::format("\n## The paper's numbers\n\n{}\n\n| | |\n|---|---|\n", spec.paper_source);
     for (const auto& [k, v] : spec.paper) md += fmt::format("| {} | {} |\n", k, v);
@@ -446,17 +519,23 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
   for (const std::string& name : spec.btfs)
     md += fmt::format("{}: ![{} tiles](images/{}-tiles.png)\n\n", name, name, name);
   md += fmt::format(
-      "\n## {} with the {} BTF under {}\n\n| material | image | error map | image rel. L2 "
-      "|\n|---|---|---|---|\n",
+      "\n## {} with the {} BTF under {}\n\nAgainst the render with the full BTF, over the "
+      "object's pixels: `image rel. L2` of the linear (HDR) images; `SSIM` (Wang et al. 2004, "
+      "11 x 11 Gaussian window, sigma 1.5, `core/include/prtlab/image/ssim.h`) and `display "
+      "RMSE` (in [0, 1] display units; 1/255 is one 8-bit level) of the tone-mapped images the "
+      "PNGs show (the full render's exposure, gamma 2.2, clamped at 1).\n\n| material | image | "
+      "error map | image rel. L2 | SSIM | display RMSE |\n|---|---|---|---|---|---|\n",
       spec.scene, spec.image_btf, spec.environment);
   for (const json& i : images)
     md += fmt::format(
-        "| {} | ![]({}) | {} | {} |\n", i.at("label").get<std::string>(),
+        "| {} | ![]({}) | {} | {} | {} | {} |\n", i.at("label").get<std::string>(),
         i.at("file").get<std::string>(),
         i.contains("error_map") ? "![](" + i.at("error_map").get<std::string>() + ")" : "",
-        i.contains("image_error")
-            ? fmt::format("{:.4f}", i.at("image_error").at("relative_l2").get<double>())
-            : std::string("reference"));
+        i.contains("image_error") ? number(i.at("image_error"), "relative_l2", "{:.4f}")
+                                  : std::string("reference"),
+        i.contains("ssim") ? number(i, "ssim", "{:.4f}") : std::string(""),
+        i.contains("display_error") ? number(i.at("display_error"), "rmse", "{:.4f}")
+                                    : std::string(""));
   write_text_atomically(folder / "README.md", md);
   write_text_atomically(folder / ".complete", "");
   result["folder"] = folder.string();

@@ -2,7 +2,11 @@
 // product of three factors (its last step exactly for a rank-1 residue, the whole product by
 // the alternating refinement the paper does not have); clustering with as many clusters as texels
 // is lossless before quantisation; 8-bit storage stays within the bound its steps imply; every
-// ABRDF of a texel-varying product BTF comes back through the material. The material conformance
+// ABRDF of a texel-varying product BTF comes back through the material; step 1's resampling
+// reads the incident direction on the light grid and the exitant one on the view grid (an ABRDF
+// of the light alone gives the halfway means of the light function at the GSHD incident
+// directions; a light/view swap is invisible to Q by the mirror symmetry of the GSHD difference
+// grid). The material conformance
 // suite covers the OpenCL evaluation against the C++ one, save/load and the declared error.
 #include "cmf/cmf.h"
 
@@ -17,6 +21,7 @@
 #include "prtlab/btf/halfway_parameterization.h"
 #include "prtlab/compress/material_error.h"
 #include "prtlab/render/factored_material.h"
+#include "prtlab/sphere/hemisphere_grid.h"
 
 namespace prt::cmf {
 namespace {
@@ -200,6 +205,110 @@ TEST(Cmf, EightBitStorageStaysWithinTheBoundOfItsSteps) {
           EXPECT_LE(std::abs(fp->reflectance(t, v, j)[c] - q8->reflectance(t, v, j)[c]), bound)
               << "texel " << t << " view " << v << " light " << j << " channel " << c;
         }
+  }
+}
+
+// The halfway means of g at the GSHD incident directions, interpolated on a light grid of
+// `interp_side` whose sample j is read as direction j of the light grid of `light_side`.
+std::vector<double> gshd_light_means(const ChainOptions& o, int interp_side,
+                                     double (*g)(const Vec3d&), std::vector<double>* analytic) {
+  const HemisphereGrid grid(o.light_side), half(o.half_side), diff(o.diff_side);
+  std::vector<double> q(static_cast<std::size_t>(half.cell_count()), -1.0);
+  if (analytic) analytic->assign(q.size(), -1.0);
+  for (int a = 0; a < half.cell_count(); ++a) {
+    double interp = 0, exact = 0;
+    int n = 0;
+    for (int b = 0; b < diff.cell_count(); ++b) {
+      const auto [in, out] = gshd_to_in_out(half.direction(a), diff.direction(b));
+      if (!(in.z > 0.0 && out.z > 0.0)) continue;
+      const BtfViewSamples li = btf_view_samples(interp_side, Vec3(in));
+      for (int k = 0; k < 4; ++k) interp += li.weight[k] * g(grid.direction(li.view[k]));
+      exact += g(in);
+      ++n;
+    }
+    if (n == 0) continue;  // no valid pair: the chain falls back to the mean of f
+    q[static_cast<std::size_t>(a)] = interp / n;
+    if (analytic) (*analytic)[static_cast<std::size_t>(a)] = exact / n;
+  }
+  return q;
+}
+
+double light_only(const Vec3d& d) {
+  return 4.0 + 3.0 * d.x + d.y;
+}
+
+TEST(Cmf, TheResamplingStepReadsTheLightOnTheLightGrid) {
+  // f(d, e) = g(d): with `halfway = mean` Q_a is the mean over the valid difference cells b of
+  // the resampled f at the GSHD pair (in, out) of (a, b), i.e. of g interpolated on the light
+  // grid at `in`, and close to the mean of g(in) itself. Light and view grids differ (6, 5), so
+  // that reading the incident direction on the view grid is a mistake the test sees: the
+  // negative control computes what that mistake gives (a 5 x 5 grid's samples read as light
+  // bins) and must land far from Q.
+  ChainOptions o;
+  o.light_side = 6;
+  o.view_side = 5;
+  o.half_side = o.diff_side = 8;
+  o.halfway = HalfwayRule::kMean;
+  const ChainedFactorization chain(o);
+  const int m = chain.light_count(), v = chain.view_count(), h = chain.half_count();
+  const HemisphereGrid grid(o.light_side);
+  std::vector<double> f(static_cast<std::size_t>(m) * v);
+  for (int e = 0; e < v; ++e)
+    for (int j = 0; j < m; ++j)
+      f[static_cast<std::size_t>(e) * m + j] = light_only(grid.direction(j));
+  std::vector<double> p(m), q(h), r(v);
+  chain.factor(f, p, q, r);
+  std::vector<double> analytic;
+  const std::vector<double> want = gshd_light_means(o, o.light_side, light_only, &analytic);
+  const std::vector<double> wrong = gshd_light_means(o, o.view_side, light_only, nullptr);
+  double exact_err = 0, analytic_err = 0, wrong_err = 0;
+  int cells = 0;
+  for (int a = 0; a < h; ++a) {
+    if (want[static_cast<std::size_t>(a)] < 0) continue;
+    ++cells;
+    exact_err = std::max(exact_err, std::abs(q[a] - want[static_cast<std::size_t>(a)]));
+    analytic_err = std::max(analytic_err, std::abs(q[a] - analytic[static_cast<std::size_t>(a)]));
+    wrong_err = std::max(wrong_err, std::abs(wrong[static_cast<std::size_t>(a)] - q[a]));
+  }
+  ASSERT_GT(cells, h / 2);
+  EXPECT_LT(exact_err, 1e-6) << "float weights: rounding of a few 1e-8 of g";
+  EXPECT_LT(analytic_err, 0.3) << "interpolation error of g on a 6 x 6 grid (g spans 0.8 .. 7.2)";
+  EXPECT_GT(wrong_err, 1.0) << "negative control: the incident direction on the view grid";
+}
+
+TEST(Cmf, TheHalfwayFactorCannotSeeALightViewSwap) {
+  // With equal grids, swapping light and view in the ABRDF (f'(d, e) = f(e, d), what a swap of
+  // the two indices in the resampling reads) maps the GSHD row (a, b) to (a, b'), b' the
+  // difference cell mirrored through the halfway axis: the exitant direction is the incident
+  // one mirrored about h, and the concentric difference grid is point-symmetric. Both halfway
+  // rules (the mean over b, the rank-1 fit over b) are invariant under that permutation of b,
+  // so Q is the same: a swapped resampling would be harmless to Q and no test of Q can catch
+  // it (the resampling test in tests/core/halfway_parameterization_test.cpp checks the rows).
+  for (HalfwayRule rule : {HalfwayRule::kMean, HalfwayRule::kSvd}) {
+    ChainOptions o;
+    o.light_side = o.view_side = 6;
+    o.half_side = o.diff_side = 8;
+    o.halfway = rule;
+    const ChainedFactorization chain(o);
+    const int m = chain.light_count(), h = chain.half_count();
+    const HemisphereGrid grid(6);
+    std::vector<double> f(static_cast<std::size_t>(m) * m), swapped(f.size());
+    for (int e = 0; e < m; ++e)
+      for (int j = 0; j < m; ++j) {
+        const double x = light_only(grid.direction(j)) * (2.0 - grid.direction(e).y);
+        f[static_cast<std::size_t>(e) * m + j] = x;
+        swapped[static_cast<std::size_t>(j) * m + e] = x;
+      }
+    std::vector<double> p(m), q(h), r(m), qs(h);
+    chain.factor(f, p, q, r);
+    chain.factor(swapped, p, qs, r);
+    double diff = 0, peak = 0;
+    for (int a = 0; a < h; ++a) {
+      diff = std::max(diff, std::abs(q[a] - qs[a]));
+      peak = std::max(peak, q[a]);
+    }
+    EXPECT_LT(diff, 1e-6 * peak) << "rule " << static_cast<int>(rule);
+    EXPECT_GT(peak, 1.0);
   }
 }
 

@@ -145,8 +145,10 @@ RgbImage read_exr(const fs::path& file) {
   }
 }
 
-void write_png(const RgbImage& image, const fs::path& file, const ToneMap& tm) {
-  check_image(image, file);
+namespace {
+
+// The scale before the curve: 2^exposure, times the auto exposure's.
+double display_scale(const RgbImage& image, const ToneMap& tm) {
   double scale = std::exp2(tm.exposure);
   if (tm.auto_exposure) {
     std::vector<float> lum;
@@ -165,17 +167,37 @@ void write_png(const RgbImage& image, const fs::path& file, const ToneMap& tm) {
     }
     if (p99 > 0.f) scale *= 0.9 / p99;
   }
+  return scale;
+}
+
+double display_value(float value, double scale, const ToneMap& tm) {
   const double inv_gamma = tm.gamma > 0.0 ? 1.0 / tm.gamma : 1.0;
+  double x = value * scale;
+  if (!std::isfinite(x) || x < 0.0) x = 0.0;
+  if (tm.reinhard) x = x / (1.0 + x);
+  return std::pow(std::min(x, 1.0), inv_gamma);
+}
+
+}  // namespace
+
+RgbImage tone_mapped(const RgbImage& image, const ToneMap& tm) {
+  const double scale = display_scale(image, tm);
+  RgbImage out(image.width, image.height);
+  out.pixels.resize(image.pixels.size());
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      out.pixels[i][c] = static_cast<float>(display_value(image.pixels[i][c], scale, tm));
+  return out;
+}
+
+void write_png(const RgbImage& image, const fs::path& file, const ToneMap& tm) {
+  check_image(image, file);
+  const double scale = display_scale(image, tm);
   std::vector<unsigned char> rgb(image.pixels.size() * 3);
-  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
-    for (int c = 0; c < 3; ++c) {
-      double x = image.pixels[i][c] * scale;
-      if (!std::isfinite(x) || x < 0.0) x = 0.0;
-      if (tm.reinhard) x = x / (1.0 + x);
-      x = std::pow(std::min(x, 1.0), inv_gamma);
-      rgb[3 * i + c] = static_cast<unsigned char>(std::lround(x * 255.0));
-    }
-  }
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      rgb[3 * i + c] = static_cast<unsigned char>(
+          std::lround(display_value(image.pixels[i][c], scale, tm) * 255.0));
   std::vector<unsigned char> png;
   auto append = [](void* ctx, void* data, int size) {
     auto* out = static_cast<std::vector<unsigned char>*>(ctx);

@@ -143,4 +143,12 @@ std::vector<double> dequantize(const QuantizedBlocks& q) {
   return out;
 }
 
+double gamma_code_error_bound(double block_max, double gamma) {
+  if (!(gamma >= 1.0) || !std::isfinite(gamma) || !(block_max >= 0.0) || !std::isfinite(block_max))
+    throw ParameterError(fmt::format(
+        "gamma code error bound: gamma {} must be finite and >= 1, block_max {} finite and >= 0",
+        gamma, block_max));
+  return block_max * -std::expm1(gamma * std::log1p(-1.0 / 510.0));
+}
+
 }  // namespace prt

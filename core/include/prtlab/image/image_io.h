@@ -35,6 +35,10 @@ struct ToneMap {
   bool reinhard = false;
 };
 void write_png(const RgbImage& image, const std::filesystem::path& file, const ToneMap& tm = {});
+/// The display values write_png stores, before the 8-bit rounding: each channel in [0, 1]
+/// (a non-finite or negative value becomes 0). For image comparisons on what a viewer sees
+/// (ssim.h).
+RgbImage tone_mapped(const RgbImage& image, const ToneMap& tm = {});
 
 /// Cubemap as a horizontal cross (4R x 3R; unused cells black):
 ///          [+Y]
