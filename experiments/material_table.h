@@ -2,9 +2,11 @@
 // `prtlab experiment run btf-table`: an experiment of kind "material_table" (docs/experiments.md
 // "Material tables"): every listed material backend and parameter set on every listed BTF, with
 // the columns of Suykens et al. 2003's Table 2 (resolution, ABRDF sampling, factorisation time
-// per ABRDF, clustering time, BTF / factored / clustered sizes), the error of each material
-// against the full BTF over all samples, top-view tile images under a few light directions (the
-// paper's Fig. 3) and renders of a scene with each material beside the full BTF.
+// per ABRDF, clustering time, BTF / factored / clustered sizes), the errors of each material
+// against the full BTF over all samples (compress/material_error.h: relative L2, Suykens 2003's
+// average relative error, floored, cosine-weighted and white-light L2), top-view tile images
+// under a few light directions (the paper's Fig. 3) and renders of a scene with each material
+// beside the full BTF (relative L2 of the HDR image, SSIM and RMSE of the tone-mapped one).
 //
 //   <out>/<name>[-<variant>]/
 //     result.json   the spec, provenance, one row per (BTF, material)
