@@ -15,6 +15,11 @@ SvdState texel_pca(const Btf& btf, int rank) {
   const int n = btf.texel_count();
   const Eigen::Index d = static_cast<Eigen::Index>(btf.view_count()) * btf.light_count() * 3;
   const Eigen::Index limit = std::min<Eigen::Index>(n, d);
+  if (n > kMaxPcaTexels)
+    throw ParameterError(fmt::format(
+        "material svd: mode texel_pca takes at most {} texels (its U^2 x U^2 Gram matrix); BTF "
+        "'{}' has {}",
+        kMaxPcaTexels, btf.material(), n));
   if (rank < 1 || rank > limit)
     throw ParameterError(fmt::format(
         "material svd: rank {} is outside [1, min(U^2, 3 M V)] = [1, {}] for BTF '{}' (mode "

@@ -11,8 +11,11 @@
 
 namespace prt::svd {
 
+/// The most texels texel_pca takes: the Gram matrix of 4096 texels is 128 MB in double.
+inline constexpr int kMaxPcaTexels = 4096;
+
 /// The K = `rank` leading principal components of `btf`'s texels (1 <= rank <= min(U^2, 3MV),
-/// else a ParameterError naming `rank` and the BTF).
+/// else a ParameterError naming `rank` and the BTF; at most kMaxPcaTexels texels).
 SvdState texel_pca(const Btf& btf, int rank);
 
 }  // namespace prt::svd

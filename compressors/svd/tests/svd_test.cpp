@@ -205,6 +205,16 @@ TEST(SvdMaterial, RankBeyondTheMatrixIsRefusedNamingIt) {
   }
   EXPECT_NO_THROW(compress_material("svd", {{"rank", "4"}}, btf));
   EXPECT_NO_THROW(compress_material("svd", {{"mode", "texel_pca"}, {"rank", "4"}}, btf));
+  // 65 x 65 texels: beyond the Gram matrix texel_pca builds.
+  const auto wide =
+      std::make_shared<const Btf>("wide", 65, 1, 1, std::vector<float>(65 * 65 * 3, 0.5f));
+  try {
+    compress_material("svd", {{"mode", "texel_pca"}}, wide);
+    ADD_FAILURE() << "4225 texels accepted";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("4225"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(compress_material("svd", {}, wide));
 }
 
 TEST(SvdMaterial, OpenClEqualsTheCppReferenceInBothModes) {
