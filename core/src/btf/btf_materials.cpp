@@ -235,8 +235,8 @@ CellDistances periodic_cells(float x, float y, int cells, std::uint32_t seed) {
 // A measured-looking stone (after the rough stone and plaster samples of the Bonn BTF database):
 // a conglomerate of grains (cellular noise, its domain warped by noise so the borders meander),
 // each grain one mineral, separated by narrow dark crevices, the grain tops worn into flat
-// semi-glossy plateaus, multi-octave noise relief and fine grain everywhere. The relief is three
-// times stucco's and the crevice walls are steeper than 45 degrees, so masking and
+// semi-glossy plateaus, multi-octave noise relief and fine grain everywhere. The relief is about
+// three times stucco's and the crevice walls are steeper than 45 degrees, so masking and
 // self-shadowing dominate at grazing angles. Every period divides the tile, so the height field
 // is periodic with period 1; the finest octave (32 per tile) keeps 4 lattice cells per noise
 // cell at the smallest default geometry grid (128).
