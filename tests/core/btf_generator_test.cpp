@@ -9,10 +9,11 @@
 #include <cstdio>
 #include <cstring>
 #include <numbers>
+#include <vector>
 
+#include "prtlab/base/error.h"
 #include "prtlab/btf/btf.h"
 #include "prtlab/btf/btf_materials.h"
-#include "prtlab/base/error.h"
 #include "prtlab/sphere/hemisphere_grid.h"
 
 namespace prt {
@@ -211,6 +212,169 @@ TEST(BtfGenerator, CheckerRaisedSquaresAreGlossier) {
       (is_raised ? raised : base) += b.value(y * 16 + x, 0, 0).y;
     }
   EXPECT_GT(raised, 5.0 * base);
+}
+
+// The stone's height function is periodic with period 1: the lattice repeats its first row and
+// column at x = 1 and y = 1 by construction, so a height function that were not periodic would
+// show as a step across that seam far larger than any step inside the tile (its relief is 0.1,
+// the largest interior step on a 512 lattice about 0.01).
+TEST(BtfGenerator, StoneHeightFieldIsPeriodic) {
+  constexpr int kGrid = 512, kSide = kGrid + 1;
+  const MesoStructure m = make_btf_material("stone", kGrid);
+  ASSERT_EQ(m.positions.size(), static_cast<std::size_t>(kSide) * kSide);
+  const auto z = [&](int i, int j) {
+    return m.positions[static_cast<std::size_t>(j) * kSide + i].z;
+  };
+  float interior = 0.0f, seam = 0.0f;
+  for (int j = 0; j < kGrid; ++j)
+    for (int i = 0; i + 1 < kGrid; ++i)
+      interior =
+          std::max({interior, std::abs(z(i + 1, j) - z(i, j)), std::abs(z(j, i + 1) - z(j, i))});
+  for (int k = 0; k < kGrid; ++k)
+    seam = std::max(
+        {seam, std::abs(z(kGrid, k) - z(kGrid - 1, k)), std::abs(z(k, kGrid) - z(k, kGrid - 1))});
+  std::printf("stone: largest step %.5f inside, %.5f across the seam; relief %.4f\n", interior,
+              seam, m.max_height);
+  EXPECT_GT(m.max_height, 0.08f);
+  EXPECT_GT(interior, 0.0f);
+  EXPECT_LE(seam, interior);
+}
+
+// Every one of the stone's local BRDFs covers a real part of the tile (the BTF varies in space
+// by material as well as by geometry), the crevice floors lie below the plateaus, and the
+// plateaus are the glossy ones.
+TEST(BtfGenerator, StoneHasSpatiallyVaryingBrdfs) {
+  const MesoStructure m = make_btf_material("stone", 256);
+  ASSERT_EQ(m.brdfs.size(), 5u);
+  std::vector<double> share(m.brdfs.size(), 0.0), mean_z(m.brdfs.size(), 0.0);
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    const int b = m.triangle_brdf[t];
+    share[b] += 1.0;
+    for (int k = 0; k < 3; ++k) mean_z[b] += m.positions[m.indices[3 * t + k]].z / 3.0;
+  }
+  for (std::size_t b = 0; b < share.size(); ++b) {
+    mean_z[b] /= share[b];
+    share[b] /= static_cast<double>(m.triangle_count());
+    std::printf("stone BRDF %zu: %.3f of the triangles, mean height %.4f\n", b, share[b],
+                mean_z[b]);
+    EXPECT_GT(share[b], 0.03) << b;
+  }
+  for (std::size_t b = 1; b < share.size(); ++b) EXPECT_LT(mean_z[0], mean_z[b]) << b;
+  for (std::size_t b = 0; b + 1 < share.size(); ++b) {
+    EXPECT_LT(mean_z[b], mean_z[4]) << b;
+    EXPECT_GT(m.brdfs[b].roughness, 2.0f * m.brdfs[4].roughness) << b;
+  }
+}
+
+// Self-shadowing and masking. From the zenith light a height field casts no shadow: every
+// texel of the BTF is lit, and no point of a plateau is dark; the only dark points are a few in
+// the crevices' sharp concave creases, where the shadow ray's offset along one triangle's normal
+// ends up under its steep neighbour. Towards the horizon the crevices and the flanks facing away
+// fall into shadow, several times more than on the flatter stucco; at grazing views the grains
+// hide the crevice floors.
+TEST(BtfGenerator, StoneShadowsAndMasksAtGrazingAngles) {
+  const Btf top = generate_btf(make_btf_material("stone", 128), tiny(16, 1, 1));
+  for (int t = 0; t < top.texel_count(); ++t)
+    for (int c = 0; c < 3; ++c) ASSERT_GT(top.value(t, 0, 0)[c], 0.0f) << "texel " << t;
+
+  const MesoTracer stone(make_btf_material("stone", 256));
+  const MesoTracer stucco(make_btf_material("stucco", 256));
+  const auto at = [](double theta_deg) {
+    const double t = theta_deg * kPi / 180.0;
+    return Vec3(static_cast<float>(std::sin(t)), 0.0f, static_cast<float>(std::cos(t)));
+  };
+  constexpr int kN = 100;
+  constexpr int kPlateau = 4;
+  // Fraction of the points seen from the zenith that are dark under a light at theta_deg, and
+  // how many of them lie on a plateau.
+  const auto shadowed = [&](const MesoTracer& tracer, double theta_deg, int* plateau_dark) {
+    int dark = 0;
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x) {
+        const auto h = tracer.visible_point({(x + 0.5f) / kN, (y + 0.5f) / kN}, {0.f, 0.f, 1.f});
+        EXPECT_TRUE(h.found);
+        const Vec3 l = at(theta_deg);
+        const bool d = glm::dot(h.shading_normal, l) <= 0.0f ||
+                       glm::dot(h.geometric_normal, l) <= 0.0f ||
+                       tracer.occluded(h.position + 1e-4f * h.geometric_normal, l);
+        dark += d;
+        if (plateau_dark) *plateau_dark += d && h.brdf == kPlateau;
+      }
+    return static_cast<double>(dark) / (kN * kN);
+  };
+  const auto crevices_seen = [&](double theta_deg) {
+    int floor = 0;
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x)
+        floor += stone.visible_point({(x + 0.5f) / kN, (y + 0.5f) / kN}, at(theta_deg)).brdf == 0;
+    return static_cast<double>(floor) / (kN * kN);
+  };
+  int plateau_dark_at_zenith = 0, plateau_dark_at_85 = 0;
+  const double s0 = shadowed(stone, 0.0, &plateau_dark_at_zenith);
+  const double s45 = shadowed(stone, 45.0, nullptr), s75 = shadowed(stone, 75.0, nullptr);
+  const double s85 = shadowed(stone, 85.0, &plateau_dark_at_85);
+  const double stucco75 = shadowed(stucco, 75.0, nullptr);
+  const double c0 = crevices_seen(0.0), c75 = crevices_seen(75.0);
+  std::printf(
+      "stone shadowed: %.4f at 0, %.3f at 45, %.3f at 75, %.3f at 85 deg (stucco %.3f at 75); "
+      "plateau points dark: %d at 0, %d at 85 deg; crevice floor seen %.3f from the zenith, %.3f "
+      "at 75 deg\n",
+      s0, s45, s75, s85, stucco75, plateau_dark_at_zenith, plateau_dark_at_85, c0, c75);
+  EXPECT_EQ(plateau_dark_at_zenith, 0);
+  EXPECT_GT(plateau_dark_at_85, 0);
+  EXPECT_LT(s0, 0.002);
+  EXPECT_LT(s0, s45);
+  EXPECT_LT(s45, s75);
+  EXPECT_LT(s75, s85);
+  EXPECT_GT(s75, 0.3);
+  EXPECT_GT(s75, 3.0 * stucco75);
+  EXPECT_GT(c0, 0.1);
+  EXPECT_LT(c75, 0.5 * c0);
+}
+
+// The stone's BTF is not separable into a texture times one ABRDF: the texel x (view, light)
+// matrix of each channel is far from rank 1 (the flat Lambertian's is rank 1 to rounding).
+TEST(BtfGenerator, StoneBtfIsNotSeparable) {
+  const auto rank1_residual = [](const Btf& b, int c) {
+    const int rows = b.texel_count(), cols = b.view_count() * b.light_count();
+    const auto a = [&](int r, int k) {
+      return static_cast<double>(b.value(r, k / b.light_count(), k % b.light_count())[c]);
+    };
+    // Power iteration on A^T A for the largest singular value.
+    std::vector<double> v(static_cast<std::size_t>(cols), 1.0), u(static_cast<std::size_t>(rows));
+    double sigma2 = 0.0, total = 0.0;
+    for (int r = 0; r < rows; ++r)
+      for (int k = 0; k < cols; ++k) total += a(r, k) * a(r, k);
+    for (int it = 0; it < 200; ++it) {
+      for (int r = 0; r < rows; ++r) {
+        double s = 0.0;
+        for (int k = 0; k < cols; ++k) s += a(r, k) * v[k];
+        u[r] = s;
+      }
+      double norm = 0.0;
+      for (int k = 0; k < cols; ++k) {
+        double s = 0.0;
+        for (int r = 0; r < rows; ++r) s += a(r, k) * u[r];
+        v[k] = s;
+        norm += s * s;
+      }
+      norm = std::sqrt(norm);
+      for (double& x : v) x /= norm;
+      double uu = 0.0;
+      for (double x : u) uu += x * x;
+      sigma2 = uu;  // |A v|^2 with the previous unit v
+    }
+    return std::sqrt(std::max(0.0, total - sigma2) / total);
+  };
+  const BtfParams p = tiny(16, 4, 4);
+  const Btf flat = generate_btf(make_btf_material("lambert"), p);
+  const Btf stone = generate_btf(make_btf_material("stone", 128), p);
+  for (int c = 0; c < 3; ++c) {
+    const double f = rank1_residual(flat, c), s = rank1_residual(stone, c);
+    std::printf("channel %d: rank-1 relative residual lambert %.2e, stone %.3f\n", c, f, s);
+    EXPECT_LT(f, 1e-3);
+    EXPECT_GT(s, 0.2);
+  }
 }
 
 TEST(BtfGenerator, ParametersAreValidated) {

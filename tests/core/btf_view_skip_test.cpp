@@ -78,7 +78,7 @@ TEST(BtfViewSkip, GeneratedLambertIsDetectedAndMesoStructureIsNot) {
   p.supersampling = 1;
   p.geometry_grid = 32;
   EXPECT_TRUE(generate_btf(make_btf_material("lambert"), p).view_independent());
-  for (const char* name : {"checker", "bumps", "stucco"})
+  for (const char* name : {"checker", "bumps", "stucco", "stone"})
     EXPECT_FALSE(generate_btf(make_btf_material(name, 32), p).view_independent()) << name;
 }
 

@@ -196,6 +196,113 @@ MesoStructure make_stucco(int grid) {
   return m;
 }
 
+// Periodic cellular (Worley) noise on `cells` x `cells` jittered feature points per tile: the
+// distances, in tile units, from (x, y) to the nearest and second-nearest feature point over the
+// periodic tiling, and the nearest point's cell id. The 5 x 5 neighbourhood makes both exact for
+// jitter within a cell.
+struct CellDistances {
+  float d1 = 1e9f, d2 = 1e9f;
+  std::uint32_t cell = 0;
+};
+
+CellDistances periodic_cells(float x, float y, int cells, std::uint32_t seed) {
+  const float fx = x * cells, fy = y * cells;
+  const int ci = static_cast<int>(std::floor(fx)), cj = static_cast<int>(std::floor(fy));
+  const auto wrap = [cells](int k) {
+    return static_cast<std::uint32_t>(((k % cells) + cells) % cells);
+  };
+  const auto unit = [](std::uint32_t h) {
+    return static_cast<float>(h >> 8) / static_cast<float>(1u << 24);
+  };
+  CellDistances r;
+  for (int dj = -2; dj <= 2; ++dj)
+    for (int di = -2; di <= 2; ++di) {
+      const std::uint32_t wi = wrap(ci + di), wj = wrap(cj + dj);
+      const float px = ci + di + 0.1f + 0.8f * unit(hash3(wi, wj, seed));
+      const float py = cj + dj + 0.1f + 0.8f * unit(hash3(wi, wj, seed + 1));
+      const float d = std::hypot(px - fx, py - fy) / cells;
+      if (d < r.d1) {
+        r.d2 = r.d1;
+        r.d1 = d;
+        r.cell = wj * static_cast<std::uint32_t>(cells) + wi;
+      } else if (d < r.d2) {
+        r.d2 = d;
+      }
+    }
+  return r;
+}
+
+// A measured-looking stone (after the rough stone and plaster samples of the Bonn BTF database):
+// a conglomerate of grains (cellular noise, its domain warped by noise so the borders meander),
+// each grain one mineral, separated by narrow dark crevices, the grain tops worn into flat
+// semi-glossy plateaus, multi-octave noise relief and fine grain everywhere. The relief is about
+// three times stucco's and the crevice walls are steeper than 45 degrees, so masking and
+// self-shadowing dominate at grazing angles. Every period divides the tile, so the height field
+// is periodic with period 1; the finest octave (32 per tile) keeps 4 lattice cells per noise
+// cell at the smallest default geometry grid (128).
+struct StoneFields {
+  float border;        ///< distance to the nearest grain border, tile units (about 0 .. 0.1)
+  float relief;        ///< 0 .. 1, multi-octave noise
+  float grain;         ///< 0 .. 1, fine roughness
+  std::uint32_t cell;  ///< the grain
+};
+
+constexpr int kStoneGrains = 5;             // per tile side
+constexpr float kStoneHeight = 0.10f;       // of the grain tops above the crevice floors
+constexpr float kStoneCrackWidth = 0.022f;  // tile units from the border to the grain's flank
+constexpr float kStoneShoulder = 0.06f;     // tile units from the border to the plateau
+
+StoneFields stone_fields(float x, float y) {
+  StoneFields s;
+  const float wx = x + 0.05f * periodic_noise(x, y, 4, 30) + 0.02f * periodic_noise(x, y, 8, 32);
+  const float wy = y + 0.05f * periodic_noise(x, y, 4, 31) + 0.02f * periodic_noise(x, y, 8, 33);
+  const CellDistances c = periodic_cells(wx, wy, kStoneGrains, 34);
+  s.border = 0.5f * (c.d2 - c.d1);
+  s.cell = c.cell;
+  float f = 0.0f, amp = 0.5f;
+  int period = 4;
+  for (std::uint32_t o = 0; o < 4; ++o, amp *= 0.5f, period *= 2)
+    f += amp * periodic_noise(x, y, period, 20 + o);
+  s.relief = std::clamp(0.5f + 0.6f * f, 0.0f, 1.0f);
+  s.grain =
+      0.5f + 0.5f * (0.6f * periodic_noise(x, y, 32, 24) + 0.4f * periodic_noise(x, y, 16, 25));
+  return s;
+}
+
+// 0 at the grain border, 1 on the plateau.
+float stone_rise(const StoneFields& s) {
+  return smoothstep(0.0f, kStoneCrackWidth, s.border) * 0.55f +
+         smoothstep(kStoneCrackWidth, kStoneShoulder, s.border) * 0.45f;
+}
+
+float stone_height(float x, float y) {
+  const StoneFields s = stone_fields(x, y);
+  return kStoneHeight * (0.03f + stone_rise(s) * (0.62f + 0.25f * s.relief) + 0.10f * s.grain);
+}
+
+MesoStructure make_stone(int grid) {
+  const auto which = [](float x, float y, float) {
+    const StoneFields s = stone_fields(x, y);
+    if (s.border < 0.5f * kStoneCrackWidth) return 0;             // crevice floor and walls
+    if (s.border > kStoneShoulder && s.relief > 0.45f) return 4;  // worn plateau
+    const std::uint32_t mineral = hash3(s.cell, 7, 35) % 5;       // 2 : 2 : 1
+    return mineral < 2 ? 1 : mineral < 4 ? 2 : 3;
+  };
+  MesoStructure m = height_field_structure(
+      "stone", grid, stone_height, which,
+      {brdf({0.06f, 0.05f, 0.045f}, Rgb(0.01f), 0.8f),    // dark rough crevices
+       brdf({0.42f, 0.36f, 0.28f}, Rgb(0.04f), 0.5f),     // warm ochre-grey grains
+       brdf({0.28f, 0.30f, 0.33f}, Rgb(0.04f), 0.5f),     // cool blue-grey grains
+       brdf({0.46f, 0.24f, 0.14f}, Rgb(0.05f), 0.4f),     // rust grains
+       brdf({0.60f, 0.56f, 0.50f}, Rgb(0.16f), 0.18f)});  // polished plateaus, semi-glossy
+  m.parameters = {{"grains", kStoneGrains},
+                  {"height", kStoneHeight},
+                  {"crack_width", kStoneCrackWidth},
+                  {"shoulder", kStoneShoulder},
+                  {"octaves", 4}};
+  return m;
+}
+
 }  // namespace
 
 Rgb LocalBrdf::eval(const Vec3& n, const Vec3& l, const Vec3& v) const {
@@ -340,6 +447,8 @@ const std::vector<MaterialEntry>& material_table() {
       {"rings", "three concentric gold rings on a glossy blue base", make_rings},
       {"weave", "plain weave of red warp and cream weft threads over a dark base", make_weave},
       {"stucco", "periodic fractal-noise plaster, matte", make_stucco},
+      {"stone", "rough stone: semi-glossy worn plateaus, deep dark crevices, mineral colours",
+       make_stone},
   };
   return table;
 }

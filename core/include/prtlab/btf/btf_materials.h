@@ -16,6 +16,9 @@
 //   rings    three concentric gold rings (glossy) on a glossy blue base, after Suykens et al.
 //   weave    plain weave of red warp and cream weft threads (4 x 4 per tile) over a dark base
 //   stucco   periodic fractal noise plaster (single matte material)
+//   stone    a measured-looking stone: 5 x 5 grains (warped cellular noise) of three minerals,
+//            dark rough crevices between them, worn semi-glossy plateaus, multi-octave relief
+//            0.1 high (self-shadowing and masking dominate at grazing angles)
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
