@@ -43,7 +43,10 @@ MaterialEntry registry_entry() {
       with.view_side = btf.view_side();
       return channel_factorizer(std::make_shared<const HomomorphicFactorization>(with));
     };
-    return std::make_unique<FactoredCompressor>(std::string(kName), setup, factor_coding(p),
+    // The log fit's model interpolates log Q between halfway cells: shading must do the same.
+    FactorCoding coding = factor_coding(p);
+    coding.interpolation = HalfwayInterpolation::kGeometric;
+    return std::make_unique<FactoredCompressor>(std::string(kName), setup, coding,
                                                 nlohmann::json(p.canonical()));
   };
   e.load = factored_loader(std::string(kName));

@@ -54,6 +54,9 @@ struct Errors {
   // maximum (the samples hf raises before its logarithm).
   double linear_floored_share = 0, geometric_floored_share = 0;
   double floored_fraction = 0;
+  // Share of the squared error of each model on the brightest 1 % of the BTF's values (the
+  // highlights).
+  double linear_highlight_share = 0, geometric_highlight_share = 0;
   double linear_max_abs = 0, geometric_max_abs = 0;
 };
 
@@ -67,8 +70,13 @@ Errors both_ways(const prt::FactoredMaterial& m, const prt::Btf& btf, double flo
   std::vector<Vec3> views;
   for (const Vec3& e : prt::light_directions_f(st.sampling.view_side))
     views.push_back(prt::clamp_to_hemisphere(e));
+  std::vector<float> sorted(btf.data().begin(), btf.data().end());
+  const auto top = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 99 / 100);
+  std::nth_element(sorted.begin(), top, sorted.end());
+  const float highlight = *top;
   struct Sum {
-    double ref = 0, lin = 0, geo = 0, lin_f = 0, geo_f = 0, floored = 0, lin_max = 0, geo_max = 0;
+    double ref = 0, lin = 0, geo = 0, lin_f = 0, geo_f = 0, floored = 0, lin_max = 0, geo_max = 0,
+           lin_h = 0, geo_h = 0;
   };
   std::vector<Sum> sums(static_cast<std::size_t>(texels));
   tbb::parallel_for(0, texels, [&](int t) {
@@ -101,6 +109,10 @@ Errors both_ways(const prt::FactoredMaterial& m, const prt::Btf& btf, double flo
           s.geo += dg * dg;
           s.lin_max = std::max(s.lin_max, std::abs(dl));
           s.geo_max = std::max(s.geo_max, std::abs(dg));
+          if (f[c] > highlight) {
+            s.lin_h += dl * dl;
+            s.geo_h += dg * dg;
+          }
           if (f[c] < floor * peak[c]) {
             s.lin_f += dl * dl;
             s.geo_f += dg * dg;
@@ -118,6 +130,8 @@ Errors both_ways(const prt::FactoredMaterial& m, const prt::Btf& btf, double flo
     all.lin_f += s.lin_f;
     all.geo_f += s.geo_f;
     all.floored += s.floored;
+    all.lin_h += s.lin_h;
+    all.geo_h += s.geo_h;
     all.lin_max = std::max(all.lin_max, s.lin_max);
     all.geo_max = std::max(all.geo_max, s.geo_max);
   }
@@ -127,6 +141,8 @@ Errors both_ways(const prt::FactoredMaterial& m, const prt::Btf& btf, double flo
   e.linear_floored_share = all.lin > 0 ? all.lin_f / all.lin : 0;
   e.geometric_floored_share = all.geo > 0 ? all.geo_f / all.geo : 0;
   e.floored_fraction = all.floored / (3.0 * texels * nv * nl);
+  e.linear_highlight_share = all.lin > 0 ? all.lin_h / all.lin : 0;
+  e.geometric_highlight_share = all.geo > 0 ? all.geo_h / all.geo : 0;
   e.linear_max_abs = all.lin_max;
   e.geometric_max_abs = all.geo_max;
   return e;
@@ -181,7 +197,8 @@ int run(int argc, char** argv) {
   std::string csv =
       "btf,config,lambda,floor,shipped_rel_l2,linear_rel_l2,geometric_rel_l2,linear_max_abs,"
       "geometric_max_abs,floored_sample_fraction,linear_floored_error_share,"
-      "geometric_floored_error_share\n";
+      "geometric_floored_error_share,linear_highlight_error_share,"
+      "geometric_highlight_error_share\n";
   prt::StageCache cache;
   for (const std::string& name : split(opt["btfs"])) {
     prt::BtfParams bp;
@@ -211,11 +228,14 @@ int run(int argc, char** argv) {
                       {"geometric_max_abs", e.geometric_max_abs},
                       {"floored_sample_fraction", e.floored_fraction},
                       {"linear_floored_error_share", e.linear_floored_share},
-                      {"geometric_floored_error_share", e.geometric_floored_share}});
-      csv += fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n",
-                         name, config, opt["lambda"], opt["floor"], shipped, e.linear, e.geometric,
-                         e.linear_max_abs, e.geometric_max_abs, e.floored_fraction,
-                         e.linear_floored_share, e.geometric_floored_share);
+                      {"geometric_floored_error_share", e.geometric_floored_share},
+                      {"linear_highlight_error_share", e.linear_highlight_share},
+                      {"geometric_highlight_error_share", e.geometric_highlight_share}});
+      csv += fmt::format(
+          "{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n",
+          name, config, opt["lambda"], opt["floor"], shipped, e.linear, e.geometric,
+          e.linear_max_abs, e.geometric_max_abs, e.floored_fraction, e.linear_floored_share,
+          e.geometric_floored_share, e.linear_highlight_share, e.geometric_highlight_share);
     }
   }
   const std::string stem = opt["tag"].empty() ? "interpolation" : "interpolation-" + opt["tag"];
