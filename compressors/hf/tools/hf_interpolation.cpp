@@ -7,7 +7,7 @@
 //
 //   hf_interpolation --out results/hf-interpolation [--btfs checker,rings,weave]
 //       [--resolution 32] [--view-side 8] [--light-side 8] [--lambda 0.1] [--floor 0.001]
-//       [--configs float,8bit,256-8bit] [--tag before]
+//       [--configs float,8bit,256-8bit] [--refine 0] [--tag before]
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
@@ -175,7 +175,7 @@ int run(int argc, char** argv) {
                                             {"resolution", "32"}, {"view-side", "8"},
                                             {"light-side", "8"},  {"lambda", "0.1"},
                                             {"floor", "0.001"},   {"configs", "float"},
-                                            {"tag", ""}};
+                                            {"tag", ""},          {"refine", "0"}};
   std::string command = "hf_interpolation";
   for (int i = 1; i < argc; ++i) {
     command += std::string(" ") + argv[i];
@@ -184,7 +184,7 @@ int run(int argc, char** argv) {
       throw prt::ParameterError(
           fmt::format("argument '{}': expected --key value with key one of "
                       "out btfs resolution view-side light-side lambda "
-                      "floor configs tag",
+                      "floor configs tag refine",
                       a));
     opt[a.substr(2)] = argv[++i];
     command += std::string(" ") + argv[i];
@@ -195,7 +195,7 @@ int run(int argc, char** argv) {
   const prt::BuildInfo& b = prt::build_info();
   nlohmann::json rows = nlohmann::json::array();
   std::string csv =
-      "btf,config,lambda,floor,shipped_rel_l2,linear_rel_l2,geometric_rel_l2,linear_max_abs,"
+      "btf,config,lambda,floor,refine,shipped_rel_l2,linear_rel_l2,geometric_rel_l2,linear_max_abs,"
       "geometric_max_abs,floored_sample_fraction,linear_floored_error_share,"
       "geometric_floored_error_share,linear_highlight_error_share,"
       "geometric_highlight_error_share\n";
@@ -211,6 +211,7 @@ int run(int argc, char** argv) {
       auto params = config_params(config);
       params["lambda"] = opt["lambda"];
       params["floor"] = opt["floor"];
+      params["refine"] = opt["refine"];
       const auto material = prt::compress_material("hf", params, btf);
       const auto* fm = dynamic_cast<const prt::FactoredMaterial*>(material.get());
       PRT_CHECK(fm != nullptr, "hf_interpolation: hf did not give a factored material");
@@ -232,8 +233,8 @@ int run(int argc, char** argv) {
                       {"linear_highlight_error_share", e.linear_highlight_share},
                       {"geometric_highlight_error_share", e.geometric_highlight_share}});
       csv += fmt::format(
-          "{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n",
-          name, config, opt["lambda"], opt["floor"], shipped, e.linear, e.geometric,
+          "{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n",
+          name, config, opt["lambda"], opt["floor"], opt["refine"], shipped, e.linear, e.geometric,
           e.linear_max_abs, e.geometric_max_abs, e.floored_fraction, e.linear_floored_share,
           e.geometric_floored_share, e.linear_highlight_share, e.geometric_highlight_share);
     }
