@@ -260,8 +260,11 @@ double FactoredMaterial::flops_per_pixel() const {
   // R at the view (4 samples), then per light the halfway lookup of Q (4 samples) and the
   // product s P Q R with the dot product's multiply-add; the halfway direction itself is a
   // texture coordinate, shared by the channels, as in the paper's vertex program.
+  // The geometric interpolation adds 4 logarithms and an exponential per light, counted as one
+  // operation each (a GPU's special-function unit).
   const double m = state_.sampling.light_count();
-  return 8.0 + 2.0 + m * (8.0 + 2.0 + 2.0);
+  const double geometric = state_.interpolation == HalfwayInterpolation::kGeometric ? 5.0 : 0.0;
+  return 8.0 + 2.0 + m * (8.0 + 2.0 + 2.0 + geometric);
 }
 
 Rgb FactoredMaterial::reflectance(int texel, int view, int light) const {
@@ -352,7 +355,9 @@ class FactoredDeviceMaterial final : public DeviceMaterial {
         }
         (void)offset(texels.size());
       }
-      // half_side <= 256 (load checks it), so bit 16 is free for the interpolation.
+      // The kernel reads half_side from the low 16 bits and the interpolation from bit 16.
+      PRT_CHECK(st.half_side < (1 << 16), "material {}: half side {} too large for the kernel",
+                backend, st.half_side);
       const cl_int geometric = st.interpolation == HalfwayInterpolation::kGeometric ? 1 : 0;
       info.push_back(cl_int4{{s.resolution, s.view_side, st.half_side | (geometric << 16),
                               static_cast<cl_int>(it->second)}});
