@@ -2,18 +2,21 @@
 // (render/factored_material.h: the `cmf` and `hf` materials of Suykens et al. 2003). For a hit,
 // prt_material_begin folds the light-independent part of each texel sample, its filter weight
 // x scale x R(e) (R read at the 4 view samples around e); each light then reads P at its bin
-// and Q at the 4 halfway-grid samples around normalize(d_j + e). Implements the material
+// and Q at the 4 halfway-grid samples around normalize(d_j + e), interpolated linearly or
+// geometrically (exp of the interpolated log, a Q below FLT_MIN read as FLT_MIN) as the part's
+// state says (render/factored_material.h). Implements the material
 // contract of compress/material_compressor.h; kernels/btf_lookup.cl comes before this file.
 //
 // Data:
 //   fm_books    every part's P, Q and R codebooks, packed float RGB
 //   fm_texels   per texel of every part: the float offsets of its P, Q and R entries in fm_books
 //   fm_scales   per texel: the RGB scale
-//   fm_info     per part: (U, view_side, half_side, first texel in fm_texels / fm_scales)
+//   fm_info     per part: (U, view_side, half_side | geometric << 16, first texel in
+//               fm_texels / fm_scales); geometric is 1 for the geometric halfway interpolation
 //   fm_lights   the M light directions (xyz)
 
-#define PRT_MATERIAL_PARAMS                                                              \
-  , __global const float *restrict fm_books, __global const uint4 *restrict fm_texels, \
+#define PRT_MATERIAL_PARAMS                                                             \
+  , __global const float *restrict fm_books, __global const uint4 *restrict fm_texels,  \
       __global const float4 *restrict fm_scales, __global const int4 *restrict fm_info, \
       __global const float4 *restrict fm_lights
 #define PRT_MATERIAL_ARGS , fm_books, fm_texels, fm_scales, fm_info, fm_lights
@@ -21,6 +24,7 @@
 typedef struct {
   float3 e;
   int half_side;
+  int geometric;
   int n;
   uint p[PRT_TEXELS];
   uint q[PRT_TEXELS];
@@ -35,7 +39,8 @@ void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MA
   const int4 info = fm_info[part];
   const int res = info.x, side = info.y;
   m->e = prt_clamp_to_hemisphere(view);
-  m->half_side = info.z;
+  m->half_side = info.z & 0xffff;
+  m->geometric = (info.z >> 16) & 1;
   int texels[4];
   float texel_w[4];
   const int count = prt_texel_samples(res, uv, texels, texel_w);
@@ -53,6 +58,16 @@ void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MA
   m->n = count;
 }
 
+float3 fm_halfway(__global const float* q, const int* cells, const float* w, int geometric) {
+  float3 v = (float3)(0.0f);
+  if (!geometric) {
+    for (int k = 0; k < 4; ++k) v += w[k] * fm_load3(q + cells[k] * 3);
+    return v;
+  }
+  for (int k = 0; k < 4; ++k) v += w[k] * log(fmax(fm_load3(q + cells[k] * 3), (float3)(FLT_MIN)));
+  return exp(v);
+}
+
 float3 fm_light(const prt_material* m, int j PRT_MATERIAL_PARAMS) {
   const float3 h = normalize(fm_lights[j].xyz + m->e);
   int cells[4];
@@ -60,9 +75,7 @@ float3 fm_light(const prt_material* m, int j PRT_MATERIAL_PARAMS) {
   prt_view_samples(m->half_side, h, cells, w);
   float3 sum = (float3)(0.0f);
   for (int t = 0; t < m->n; ++t) {
-    __global const float* q = fm_books + m->q[t];
-    float3 qv = (float3)(0.0f);
-    for (int k = 0; k < 4; ++k) qv += w[k] * fm_load3(q + cells[k] * 3);
+    const float3 qv = fm_halfway(fm_books + m->q[t], cells, w, m->geometric);
     sum += m->coef[t] * fm_load3(fm_books + m->p[t] + j * 3) * qv;
   }
   return sum;

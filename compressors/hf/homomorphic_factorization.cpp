@@ -40,7 +40,8 @@ void add_laplacian(Triplets& t, int& row, int col, int side, double lambda) {
 HomomorphicFactorization::HomomorphicFactorization(const HomomorphicOptions& options)
     : o_(options) {
   PRT_CHECK(o_.light_side >= 1 && o_.view_side >= 1 && o_.half_side >= 1, "hf: grid sides");
-  PRT_CHECK(o_.lambda > 0 && o_.floor > 0 && o_.floor < 1, "hf: lambda > 0, 0 < floor < 1");
+  PRT_CHECK(o_.lambda > 0 && o_.floor > 0 && o_.floor < 1 && o_.refine >= 0,
+            "hf: lambda > 0, 0 < floor < 1, refine >= 0");
   const int m = light_count(), h = half_count(), v = view_count(), n = m + h + v;
   const auto w = halfway_weights(o_.light_side, o_.view_side, o_.half_side);
   Triplets data;
@@ -64,6 +65,12 @@ HomomorphicFactorization::HomomorphicFactorization(const HomomorphicOptions& opt
   ++row;
   Eigen::SparseMatrix<double> a(row, n);
   a.setFromTriplets(all.begin(), all.end());
+  Triplets reg;
+  for (const auto& t : all)
+    if (t.row() >= m * v) reg.emplace_back(t.row() - m * v, t.col(), t.value());
+  regulariser_.resize(row - m * v, n);
+  regulariser_.setFromTriplets(reg.begin(), reg.end());
+  regulariser_normal_ = Eigen::MatrixXd(regulariser_.transpose() * regulariser_);
   const Eigen::SparseMatrix<double> normal = a.transpose() * a;
   solver_.compute(normal);
   if (solver_.info() != Eigen::Success)
@@ -77,6 +84,58 @@ void HomomorphicFactorization::solve_log(std::span<const double> y, std::span<do
   const Eigen::Map<const Eigen::VectorXd> yv(y.data(), static_cast<Eigen::Index>(y.size()));
   const Eigen::VectorXd rhs = data_rows_.transpose() * yv;
   Eigen::Map<Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size())) = solver_.solve(rhs);
+}
+
+double HomomorphicFactorization::linear_objective(std::span<const double> f,
+                                                  std::span<const double> x) const {
+  const Eigen::Map<const Eigen::VectorXd> xv(x.data(), static_cast<Eigen::Index>(x.size()));
+  const Eigen::Map<const Eigen::VectorXd> fv(f.data(), static_cast<Eigen::Index>(f.size()));
+  const Eigen::VectorXd model = (data_rows_ * xv).array().exp().matrix();
+  // The regulariser rows weighted by the samples' mean square: a data row's residual relative to
+  // the data then weighs against a regulariser row in log units as in the log fit.
+  const double weight = fv.squaredNorm() / static_cast<double>(fv.size());
+  return (model - fv).squaredNorm() + weight * (regulariser_ * xv).squaredNorm();
+}
+
+double HomomorphicFactorization::refine_linear(std::span<const double> f, std::span<double> x,
+                                               int iterations) const {
+  const auto n = static_cast<Eigen::Index>(x.size());
+  Eigen::Map<Eigen::VectorXd> xv(x.data(), n);
+  const Eigen::Map<const Eigen::VectorXd> fv(f.data(), static_cast<Eigen::Index>(f.size()));
+  double objective = linear_objective(f, x);
+  const double weight = fv.squaredNorm() / static_cast<double>(fv.size());
+  if (!(weight > 0)) return objective;
+  for (int it = 0; it < iterations; ++it) {
+    // J = diag(g) A for g = exp(A x): the Gauss-Newton matrix J^T J + R^T R and the gradient
+    // J^T (g - f) + R^T R x.
+    const Eigen::VectorXd g = (data_rows_ * xv).array().exp().matrix();
+    Eigen::MatrixXd h = weight * regulariser_normal_;
+    Eigen::VectorXd grad = weight * (regulariser_normal_ * xv);
+    for (Eigen::Index s = 0; s < data_rows_.rows(); ++s) {
+      const double gs = g[s], rs = gs * (gs - fv[s]);
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator i(data_rows_, s); i; ++i) {
+        grad[i.col()] += rs * i.value();
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator k(data_rows_, s); k; ++k)
+          h(i.col(), k.col()) += gs * gs * i.value() * k.value();
+      }
+    }
+    const Eigen::VectorXd step = h.ldlt().solve(-grad);
+    if (!step.allFinite()) break;
+    bool better = false;
+    for (double t = 1.0; t > 1e-4; t *= 0.5) {
+      const Eigen::VectorXd trial = xv + t * step;
+      const double value = linear_objective(
+          f, std::span<const double>(trial.data(), static_cast<std::size_t>(trial.size())));
+      if (value < objective) {
+        xv = trial;
+        objective = value;
+        better = true;
+        break;
+      }
+    }
+    if (!better) break;
+  }
+  return objective;
 }
 
 void HomomorphicFactorization::factor(std::span<const double> f, std::span<double> p,
@@ -93,6 +152,7 @@ void HomomorphicFactorization::factor(std::span<const double> f, std::span<doubl
   std::vector<double> y(f.size()), x(static_cast<std::size_t>(m + h + v));
   for (std::size_t s = 0; s < f.size(); ++s) y[s] = std::log(std::max(f[s], floor));
   solve_log(y, x);
+  if (o_.refine > 0) refine_linear(f, x, o_.refine);
   for (int j = 0; j < m; ++j) p[j] = std::exp(x[j]);
   for (int a = 0; a < h; ++a) q[a] = std::exp(x[m + a]);
   for (int e = 0; e < v; ++e) r[e] = std::exp(x[m + h + e]);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -23,7 +24,8 @@
 namespace prt {
 namespace {
 
-constexpr std::uint32_t kStateVersion = 1;
+// Version 2 added "halfway_interpolation"; a version 1 state is linear.
+constexpr std::uint32_t kStateVersion = 2;
 constexpr char kMetaKey[] = "factored";
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -163,7 +165,26 @@ Rgb load3(const float* p) {
   return {p[0], p[1], p[2]};
 }
 
+// Q at a halfway direction from its 4 grid samples (the header's file comment; the kernel's
+// fm_halfway).
+Rgb interpolate_q(const float* q, const BtfViewSamples& h, HalfwayInterpolation mode) {
+  Rgb v(0.0f);
+  if (mode == HalfwayInterpolation::kLinear) {
+    for (int k = 0; k < 4; ++k) v += h.weight[k] * load3(q + h.view[k] * 3);
+    return v;
+  }
+  for (int k = 0; k < 4; ++k) {
+    const float* a = q + h.view[k] * 3;
+    for (int c = 0; c < 3; ++c) v[c] += h.weight[k] * std::log(std::max(a[c], FLT_MIN));
+  }
+  return {std::exp(v[0]), std::exp(v[1]), std::exp(v[2])};
+}
+
 }  // namespace
+
+const char* halfway_interpolation_name(HalfwayInterpolation mode) {
+  return mode == HalfwayInterpolation::kGeometric ? "geometric" : "linear";
+}
 
 AbrdfFactors::AbrdfFactors(int texel_count, int m, int h, int v)
     : texels(texel_count),
@@ -239,15 +260,16 @@ double FactoredMaterial::flops_per_pixel() const {
   // R at the view (4 samples), then per light the halfway lookup of Q (4 samples) and the
   // product s P Q R with the dot product's multiply-add; the halfway direction itself is a
   // texture coordinate, shared by the channels, as in the paper's vertex program.
+  // The geometric interpolation adds 4 logarithms and an exponential per light, counted as one
+  // operation each (a GPU's special-function unit).
   const double m = state_.sampling.light_count();
-  return 8.0 + 2.0 + m * (8.0 + 2.0 + 2.0);
+  const double geometric = state_.interpolation == HalfwayInterpolation::kGeometric ? 5.0 : 0.0;
+  return 8.0 + 2.0 + m * (8.0 + 2.0 + 2.0 + geometric);
 }
 
 Rgb FactoredMaterial::reflectance(int texel, int view, int light) const {
   const BtfViewSamples h = halfway_samples(state_.half_side, lights_[light], views_[view]);
-  const float* q = q_entry(texel);
-  Rgb qv(0.0f);
-  for (int k = 0; k < 4; ++k) qv += h.weight[k] * load3(q + h.view[k] * 3);
+  const Rgb qv = interpolate_q(q_entry(texel), h, state_.interpolation);
   const Rgb s = load3(state_.scale.data() + static_cast<std::size_t>(texel) * 3);
   return s * load3(p_entry(texel) + light * 3) * qv * load3(r_entry(texel) + view * 3);
 }
@@ -276,9 +298,7 @@ void FactoredMaterial::eval_lights(Vec2 uv, Vec3 view_local, std::span<Rgb> out,
     const BtfViewSamples h = halfway_samples(state_.half_side, lights_[j], e);
     Rgb sum(0.0f);
     for (int t = 0; t < texels.count; ++t) {
-      const float* q = q_entry(texels.texel[t]);
-      Rgb qv(0.0f);
-      for (int k = 0; k < 4; ++k) qv += h.weight[k] * load3(q + h.view[k] * 3);
+      const Rgb qv = interpolate_q(q_entry(texels.texel[t]), h, state_.interpolation);
       sum += coef[t] * load3(p_entry(texels.texel[t]) + j * 3) * qv;
     }
     out[j] = sum;
@@ -335,8 +355,12 @@ class FactoredDeviceMaterial final : public DeviceMaterial {
         }
         (void)offset(texels.size());
       }
-      info.push_back(
-          cl_int4{{s.resolution, s.view_side, st.half_side, static_cast<cl_int>(it->second)}});
+      // The kernel reads half_side from the low 16 bits and the interpolation from bit 16.
+      PRT_CHECK(st.half_side < (1 << 16), "material {}: half side {} too large for the kernel",
+                backend, st.half_side);
+      const cl_int geometric = st.interpolation == HalfwayInterpolation::kGeometric ? 1 : 0;
+      info.push_back(cl_int4{{s.resolution, s.view_side, st.half_side | (geometric << 16),
+                              static_cast<cl_int>(it->second)}});
     }
     std::vector<cl_float4> lights;
     for (const Vec3& d : light_directions_f(light_side))
@@ -405,6 +429,7 @@ void FactoredMaterial::save(ArchiveWriter& w) const {
                         {"clusters", {st.clusters_p, st.clusters_q, st.clusters_r}},
                         {"quantized", st.quantized},
                         {"code_gamma", st.code_gamma},
+                        {"halfway_interpolation", halfway_interpolation_name(st.interpolation)},
                         {"error", st.error},
                         {"parameters", st.parameters}});
   if (st.quantized) {
@@ -434,8 +459,9 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
   };
   try {
     const auto meta = r.meta_value<nlohmann::json>(kMetaKey);
-    if (meta.at("format_version").get<int>() != static_cast<int>(kStateVersion))
-      throw fail(fmt::format("state version {} is not {}", meta.at("format_version").dump(),
+    const int version = meta.at("format_version").get<int>();
+    if (version != 1 && version != static_cast<int>(kStateVersion))
+      throw fail(fmt::format("state version {} is not 1 or {}", meta.at("format_version").dump(),
                              kStateVersion));
     State st;
     st.backend = meta.at("backend").get<std::string>();
@@ -451,6 +477,13 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
     st.code_gamma = meta.at("code_gamma").get<double>();
     if (!(st.code_gamma >= 1.0 && st.code_gamma <= 4.0))
       throw fail(fmt::format("code gamma {} is not in 1 .. 4", st.code_gamma));
+    if (version >= 2) {
+      const std::string mode = meta.at("halfway_interpolation").get<std::string>();
+      if (mode == "geometric")
+        st.interpolation = HalfwayInterpolation::kGeometric;
+      else if (mode != "linear")
+        throw fail(fmt::format("halfway interpolation '{}' is not 'linear' or 'geometric'", mode));
+    }
     st.error = meta.at("error").get<double>();
     st.parameters = meta.at("parameters");
     const MaterialSampling& s = st.sampling;
@@ -575,6 +608,7 @@ std::unique_ptr<FactoredMaterial> encode_factored_material(
   st.half_side = half_side;
   st.quantized = coding.quantize;
   st.code_gamma = coding.quantize ? coding.code_gamma : 1.0;
+  st.interpolation = coding.interpolation;
   st.parameters = std::move(parameters);
   st.scale.resize(static_cast<std::size_t>(texels) * 3);
   for (std::size_t i = 0; i < st.scale.size(); ++i) st.scale[i] = mp[i] * mq[i] * mr[i];
@@ -611,7 +645,8 @@ std::unique_ptr<FactoredMaterial> encode_factored_material(
   st.codebook_r = std::move(br.entries);
   if (coding.refit_scale) {
     // The scale that minimises each texel channel's squared error against the BTF with the
-    // codebook entries it was given (their product g evaluated with scale 1): s = <f, g> /
+    // codebook entries it was given (their product g evaluated with scale 1 and the material's
+    // halfway interpolation, since the copy keeps it): s = <f, g> /
     // <g, g>. The maxima of the normalisation are that only for an unclustered, unquantised
     // entry of a factorisation that is itself least squares.
     FactoredMaterial::State unit = st;

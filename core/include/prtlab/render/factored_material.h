@@ -9,6 +9,15 @@
 //      sphere-bilinear interpolation of btf_view_samples at halfway_f(d, e)
 //   R  on the view grid, read with btf_view_samples at e
 //
+// Q's halfway interpolation is a property of the factored model, chosen by the backend that fits
+// it (State::interpolation): linear, sum_a w_a Q_a (a texture's bilinear filter; `cmf` fits that
+// model), or geometric, prod_a Q_a^w_a = exp(sum_a w_a log Q_a) (the interpolation a fit in
+// logarithms solves for: `hf`). Both are homogeneous of degree 1 in Q (the weights sum to 1), so
+// the normalisation below factors either exactly. In the geometric mode a Q below FLT_MIN (an
+// 8-bit code 0, an underflow) is read as FLT_MIN: its logarithm stays finite, so a neighbour of
+// weight 0 contributes nothing, and one of weight w > 0 drives the product towards 0, the limit of
+// the geometric mean as that Q goes to 0.
+//
 // Encoding (encode_factored_material):
 //   1. normalisation: each factor of each texel and channel divided by its maximum, so it lies
 //      in [0, 1]; the three maxima multiply into the texel's RGB scale (the scale map);
@@ -47,6 +56,12 @@ struct AbrdfFactors {
   AbrdfFactors(int texel_count, int m, int h, int v);
 };
 
+/// How Q is read between its halfway-grid samples (the file comment).
+enum class HalfwayInterpolation { kLinear, kGeometric };
+
+/// "linear" / "geometric", as the archive stores it.
+const char* halfway_interpolation_name(HalfwayInterpolation mode);
+
 struct FactorCoding {
   int half_side = 16;  ///< Q's grid: half_side x half_side halfway directions
   int clusters = 256;  ///< per factor set, at most the texel count; 0: no clustering
@@ -55,6 +70,8 @@ struct FactorCoding {
   double code_gamma = 2.2;  ///< 8-bit codes linear in x^(1/gamma); 1: the paper's linear codes
   std::uint64_t seed = 0;
   int kmeans_iterations = 50;
+  /// Set by the backend to the interpolation its fit assumes, not a user parameter.
+  HalfwayInterpolation interpolation = HalfwayInterpolation::kLinear;
 };
 
 /// The parameters every factored material backend takes (half_side, clusters, quantize,
@@ -81,6 +98,7 @@ class FactoredMaterial final : public CompressedMaterial {
     int clusters_p = 0, clusters_q = 0, clusters_r = 0;
     bool quantized = false;
     double code_gamma = 1.0;  ///< of the codebook codes (quantized only)
+    HalfwayInterpolation interpolation = HalfwayInterpolation::kLinear;
     std::vector<float> codebook_p, codebook_q, codebook_r;
     std::vector<std::uint32_t> index_p, index_q, index_r;
     std::vector<float> scale;  ///< texels x 3
@@ -179,7 +197,8 @@ class FactoredCompressor final : public MaterialCompressor {
 std::function<std::unique_ptr<CompressedMaterial>(const ArchiveReader&)> factored_loader(
     std::string backend);
 
-/// Steps 1-3 of the file comment, then the error against `full` (stored as the declared
+/// Steps 1-4 of the file comment, with coding.interpolation as the material's (the scale refit
+/// evaluates the model through it), then the error against `full` (stored as the declared
 /// bound). `parameters` records the fit's parameters.
 std::unique_ptr<FactoredMaterial> encode_factored_material(
     std::string backend, const Btf& full, int half_side, const AbrdfFactors& factors,
