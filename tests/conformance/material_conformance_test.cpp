@@ -42,7 +42,7 @@
 #include "prtlab/render/device_material_eval.h"
 #include "prtlab/storage/archive.h"
 #include "support/conformance_helpers.h"
-#include "support/random_directions.h"
+#include "support/material_queries.h"
 #include "support/temp_dir.h"
 #include "support/test_plugins.h"
 
@@ -137,35 +137,6 @@ std::shared_ptr<const CompressedMaterial> compress(const std::string& backend,
                                                    std::shared_ptr<const Btf> btf,
                                                    const Params& params = {}) {
   return compress_material(backend, params, std::move(btf));
-}
-
-// Queries that reach every corner of the lookups: uv outside [0, 1) (wrap-around), views from
-// the zenith to below the horizon (clamped), sample centres and random directions.
-std::vector<MaterialQuery> queries(int parts, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<float> uv(-1.5f, 2.5f);
-  std::vector<MaterialQuery> out;
-  for (int i = 0; i < 48; ++i) {
-    const Vec3d d = prt::testing::random_direction(rng);
-    // Mostly the upper hemisphere; every eighth query below it.
-    const Vec3 e(static_cast<float>(d.x), static_cast<float>(d.y),
-                 static_cast<float>(i % 8 == 7 ? -std::abs(d.z) : std::abs(d.z)));
-    out.push_back({i % parts, Vec2(uv(rng), uv(rng)), e});
-  }
-  out.push_back({0, Vec2(0.5f, 0.5f), Vec3(0.0f, 0.0f, 1.0f)});
-  out.push_back({0, Vec2(0.0f, 0.0f), Vec3(1.0f, 0.0f, 0.0f)});
-  return out;
-}
-
-// Largest |a - b| over values and channels, relative to the largest |b|.
-double max_relative(std::span<const Rgb> a, std::span<const Rgb> b) {
-  double err = 0, peak = 0;
-  for (std::size_t i = 0; i < b.size(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      err = std::max(err, static_cast<double>(std::abs(a[i][c] - b[i][c])));
-      peak = std::max(peak, static_cast<double>(std::abs(b[i][c])));
-    }
-  return peak > 0 ? err / peak : err;
 }
 
 std::vector<Rgb> cpp_vectors(std::span<const CompressedMaterial* const> parts,
@@ -265,7 +236,7 @@ TEST_P(MaterialConformance, LosslessVectorsAndShadingEqualTheFullBtfs) {
   const CompressedMaterial& m = compressed();
   if (m.declared_error_bound() != 0.0 || m.light_basis().basis != RadianceBasis::kPixel)
     GTEST_SKIP() << "lossy or not in pixel bins: compared at the samples only";
-  const auto qs = queries(1, 3);
+  const auto qs = testing::material_queries(1, 3);
   const auto dim = static_cast<std::size_t>(m.light_basis().dim);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(0.0f, 3.0f);
@@ -278,12 +249,13 @@ TEST_P(MaterialConformance, LosslessVectorsAndShadingEqualTheFullBtfs) {
     for (const auto& q : qs) {
       m.eval_lights(q.uv, q.view_local, a, filter);
       btf().eval_lights(q.uv, q.view_local, b, filter);
-      worst = std::max(worst, max_relative(a, b));
+      worst = std::max(worst, testing::max_relative_rgb(a, b));
       shaded_a.push_back(m.shade(q.uv, q.view_local, light, filter));
       shaded_b.push_back(btf().shade(q.uv, q.view_local, light, filter));
     }
     EXPECT_LE(worst, kLosslessTolerance) << "eval_lights vs Btf::eval_lights";
-    EXPECT_LE(max_relative(shaded_a, shaded_b), kLosslessTolerance) << "shade vs Btf::shade";
+    EXPECT_LE(testing::max_relative_rgb(shaded_a, shaded_b), kLosslessTolerance)
+        << "shade vs Btf::shade";
   }
 }
 
@@ -310,7 +282,7 @@ TEST_P(MaterialConformance, OpenClMatchesTheCppEvaluation) {
       EXPECT_GT(device->bytes_per_hit(p, TexelFilter::kNearest), 0u);
     EXPECT_FALSE(device->source().empty());
   }
-  const auto qs = queries(2, 5);
+  const auto qs = testing::material_queries(2, 5);
   for (const Params& options : device_param_sets(entry())) {
     for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
       SCOPED_TRACE(::testing::Message()
@@ -319,7 +291,7 @@ TEST_P(MaterialConformance, OpenClMatchesTheCppEvaluation) {
       const auto gpu = evaluate_materials_on_device(*ctx, parts, qs, filter, options);
       const auto cpp = cpp_vectors(parts, qs, filter);
       ASSERT_EQ(gpu.size(), cpp.size());
-      EXPECT_LE(max_relative(gpu, cpp), kDeviceTolerance);
+      EXPECT_LE(testing::max_relative_rgb(gpu, cpp), kDeviceTolerance);
     }
   }
 }
@@ -340,8 +312,8 @@ TEST_P(MaterialConformance, SaveLoadRoundTripIsIdentical) {
       << "reflectance differs after save/load";
   const std::vector<const CompressedMaterial*> before = {&m}, after = {loaded.get()};
   for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear})
-    EXPECT_TRUE(bit_identical(cpp_vectors(after, queries(1, 7), filter),
-                              cpp_vectors(before, queries(1, 7), filter)))
+    EXPECT_TRUE(bit_identical(cpp_vectors(after, testing::material_queries(1, 7), filter),
+                              cpp_vectors(before, testing::material_queries(1, 7), filter)))
         << "interpolated vectors differ after save/load";
   save_material(*loaded, again.path);
   EXPECT_TRUE(file_bytes(file.path) == file_bytes(again.path))

@@ -21,7 +21,7 @@
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/device_material_eval.h"
 #include "prtlab/storage/archive.h"
-#include "support/random_directions.h"
+#include "support/material_queries.h"
 #include "support/temp_dir.h"
 #include "svd/svd_material.h"
 
@@ -84,31 +84,6 @@ std::shared_ptr<const Btf> generated(const std::string& name, int res, int view_
   return std::make_shared<const Btf>(generate_btf(make_btf_material(name, 32), p));
 }
 
-std::vector<MaterialQuery> queries(int parts, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<float> uv(-1.5f, 2.5f);
-  std::vector<MaterialQuery> out;
-  for (int i = 0; i < 40; ++i) {
-    const Vec3d d = prt::testing::random_direction(rng);
-    const Vec3 e(static_cast<float>(d.x), static_cast<float>(d.y),
-                 static_cast<float>(i % 8 == 7 ? -std::abs(d.z) : std::abs(d.z)));
-    out.push_back({i % parts, Vec2(uv(rng), uv(rng)), e});
-  }
-  out.push_back({0, Vec2(0.5f, 0.5f), Vec3(0.0f, 0.0f, 1.0f)});
-  return out;
-}
-
-// Largest |a - b| relative to the largest |b|.
-double max_relative(std::span<const Rgb> a, std::span<const Rgb> b) {
-  double err = 0, peak = 0;
-  for (std::size_t i = 0; i < b.size(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      err = std::max(err, static_cast<double>(std::abs(a[i][c] - b[i][c])));
-      peak = std::max(peak, static_cast<double>(std::abs(b[i][c])));
-    }
-  return peak > 0 ? err / peak : err;
-}
-
 double sample_error(const CompressedMaterial& m, const Btf& btf) {
   double err = 0, peak = 0;
   for (int t = 0; t < btf.texel_count(); ++t)
@@ -125,14 +100,14 @@ double sample_error(const CompressedMaterial& m, const Btf& btf) {
 
 // eval_lights of the material against Btf::eval_lights (the interpolated full BTF).
 double lookup_error(const CompressedMaterial& m, const Btf& btf, TexelFilter filter) {
-  const auto qs = queries(1, 3);
+  const auto qs = testing::material_queries(1, 3);
   const auto dim = static_cast<std::size_t>(btf.light_count());
   std::vector<Rgb> a(qs.size() * dim), b(qs.size() * dim);
   for (std::size_t i = 0; i < qs.size(); ++i) {
     m.eval_lights(qs[i].uv, qs[i].view_local, std::span<Rgb>(a).subspan(i * dim, dim), filter);
     btf.eval_lights(qs[i].uv, qs[i].view_local, std::span<Rgb>(b).subspan(i * dim, dim), filter);
   }
-  return max_relative(a, b);
+  return testing::max_relative_rgb(a, b);
 }
 
 // Float rounding of a sum of at most 16 weighted products of K float factors: a few ulps of the
@@ -230,7 +205,7 @@ TEST(SvdMaterial, OpenClEqualsTheCppReferenceInBothModes) {
     const auto b =
         compress_material("svd", {{"mode", mode}, {"rank", std::to_string(ranks.second)}}, second);
     const std::vector<const CompressedMaterial*> parts = {a.get(), b.get()};
-    const auto qs = queries(2, 5);
+    const auto qs = testing::material_queries(2, 5);
     for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
       SCOPED_TRACE(mode + (filter == TexelFilter::kNearest ? " nearest" : " bilinear"));
       const auto gpu = evaluate_materials_on_device(*ctx, parts, qs, filter);
@@ -240,7 +215,7 @@ TEST(SvdMaterial, OpenClEqualsTheCppReferenceInBothModes) {
         parts[static_cast<std::size_t>(qs[i].part)]->eval_lights(
             qs[i].uv, qs[i].view_local, std::span<Rgb>(cpp).subspan(i * dim, dim), filter);
       ASSERT_EQ(gpu.size(), cpp.size());
-      EXPECT_LE(max_relative(gpu, cpp), 1e-5);
+      EXPECT_LE(testing::max_relative_rgb(gpu, cpp), 1e-5);
     }
   }
   const auto abrdf = compress_material("svd", {}, first);
