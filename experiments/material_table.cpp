@@ -466,17 +466,18 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
       return t == "-" ? std::string() : t;
     };
     csv += fmt::format(
-        "{},{},{},{},{},{},{},{},{:.4f},{:.3f},{:.3f},{},{},{},{:.6g},{:.6g},{},{},{},{},{},{},{},"
+        "{},{},{},{},{},{},{},{},{},{},{:.3f},{},{},{},{:.6g},{:.6g},{},{},{},{},{},{},{},"
         "{}\n",
         r.at("btf").get<std::string>(), r.at("resolution").get<int>(), r.at("view_side").get<int>(),
         r.at("light_side").get<int>(), r.at("samples_per_abrdf").get<int>(),
         r.at("label").get<std::string>(), r.at("backend").get<std::string>(), params,
-        r.value("factorization_ms_per_abrdf", 0.0), r.value("clustering_seconds", 0.0),
+        g("factorization_ms_per_abrdf"), g("clustering_seconds"),
         r.at("compress_seconds").get<double>(), mb(r.at("btf_bytes").get<double>()),
-        mb(r.value("factored_bytes", 0.0)), mb(r.at("stored_bytes").get<double>()),
-        r.at("rel_l2").get<double>(), r.at("max_abs").get<double>(), g("average_relative"),
-        g("average_relative_worst_abrdf"), g("average_relative_floored"), g("average_abs"),
-        r.at("zero_samples").get<std::uint64_t>(), g("cosine_l2"), g("white_light_l2"), image_cols);
+        r.contains("factored_bytes") ? mb(r.at("factored_bytes").get<double>()) : std::string(),
+        mb(r.at("stored_bytes").get<double>()), r.at("rel_l2").get<double>(),
+        r.at("max_abs").get<double>(), g("average_relative"), g("average_relative_worst_abrdf"),
+        g("average_relative_floored"), g("average_abs"), r.at("zero_samples").get<std::uint64_t>(),
+        g("cosine_l2"), g("white_light_l2"), image_cols);
   }
   write_text_atomically(folder / "table.csv", "# " + prov.summary() + "\n" + csv);
 
@@ -492,16 +493,23 @@ json run_material_table(const fs::path& file, const MaterialTableOptions& o) {
       tbb::info::default_concurrency());
   md += kErrorColumns;
   md +=
-      "| BTF | material | factorisation ms / ABRDF | clustering s | BTF MB | factored MB | stored "
-      "MB | rel. L2 | avg. rel. (Suykens) | worst ABRDF | avg. rel. floored | cos L2 | "
-      "white-light L2 |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "| BTF | material | compress s | factorisation ms / ABRDF | clustering s | BTF MB | "
+      "factored MB | stored MB | rel. L2 | avg. rel. (Suykens) | worst ABRDF | avg. rel. "
+      "floored | cos L2 | white-light L2 |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  // Factorisation time, clustering time and the factored size are a factored material's (P, Q,
+  // R per texel); other materials have none, shown as "-".
+  const auto factored_mb = [&](const json& r) {
+    return r.contains("factored_bytes") ? mb(r.at("factored_bytes").get<double>())
+                                        : std::string("-");
+  };
   for (const json& r : rows)
     md += fmt::format(
-        "| {} | {} | {:.3f} | {:.2f} | {} | {} | {} | {:.4f} | {} | {} | {} | {} | {} |\n",
+        "| {} | {} | {:.2f} | {} | {} | {} | {} | {} | {:.4f} | {} | {} | {} | {} | {} |\n",
         r.at("btf").get<std::string>(), r.at("label").get<std::string>(),
-        r.value("factorization_ms_per_abrdf", 0.0), r.value("clustering_seconds", 0.0),
-        mb(r.at("btf_bytes").get<double>()), mb(r.value("factored_bytes", 0.0)),
-        mb(r.at("stored_bytes").get<double>()), r.at("rel_l2").get<double>(),
+        r.at("compress_seconds").get<double>(), number(r, "factorization_ms_per_abrdf", "{:.3f}"),
+        number(r, "clustering_seconds", "{:.2f}"), mb(r.at("btf_bytes").get<double>()),
+        factored_mb(r), mb(r.at("stored_bytes").get<double>()), r.at("rel_l2").get<double>(),
         number(r, "average_relative", "{:.4f}"),
         number(r, "average_relative_worst_abrdf", "{:.4f}"),
         number(r, "average_relative_floored", "{:.4f}"), number(r, "cosine_l2", "{:.4f}"),
