@@ -19,21 +19,22 @@
 namespace prt {
 namespace {
 
-// The BTF's values times `scale`, and `bump` added to one sample (texel 1, view 2, light 3, red).
-class ScaledMaterial final : public CompressedMaterial {
+// The values of a BTF (a copy) times `scale`, with `bump` added to one sample (texel 1, view 2,
+// light 3, red): the material whose error against a BTF each test knows in closed form.
+class TableMaterial final : public CompressedMaterial {
  public:
-  ScaledMaterial(const Btf& btf, float scale, float bump = 0.0f)
-      : btf_(btf), scale_(scale), bump_(bump) {}
-  std::string backend() const override { return "scaled"; }
+  explicit TableMaterial(Btf values, float scale = 1.0f, float bump = 0.0f)
+      : values_(std::move(values)), scale_(scale), bump_(bump) {}
+  std::string backend() const override { return "table"; }
   StorageReport storage() const override { return {}; }
   double flops_per_pixel() const override { return 0; }
   double declared_error_bound() const override { return 0; }
   MaterialLightBasis light_basis() const override {
-    return MaterialLightBasis::pixel_bins(btf_.light_side());
+    return MaterialLightBasis::pixel_bins(values_.light_side());
   }
-  MaterialSampling sampling() const override { return sampling_of(btf_); }
+  MaterialSampling sampling() const override { return sampling_of(values_); }
   Rgb reflectance(int texel, int view, int light) const override {
-    Rgb v = btf_.value(texel, view, light) * scale_;
+    Rgb v = values_.value(texel, view, light) * scale_;
     if (texel == 1 && view == 2 && light == 3) v.x += bump_;
     return v;
   }
@@ -45,34 +46,8 @@ class ScaledMaterial final : public CompressedMaterial {
   void save(ArchiveWriter&) const override {}
 
  private:
-  const Btf& btf_;
-  float scale_, bump_;
-};
-
-// A material that returns the values of a second BTF of the same sampling.
-class OtherBtfMaterial final : public CompressedMaterial {
- public:
-  explicit OtherBtfMaterial(Btf values) : values_(std::move(values)) {}
-  std::string backend() const override { return "other"; }
-  StorageReport storage() const override { return {}; }
-  double flops_per_pixel() const override { return 0; }
-  double declared_error_bound() const override { return 0; }
-  MaterialLightBasis light_basis() const override {
-    return MaterialLightBasis::pixel_bins(values_.light_side());
-  }
-  MaterialSampling sampling() const override { return sampling_of(values_); }
-  Rgb reflectance(int texel, int view, int light) const override {
-    return values_.value(texel, view, light);
-  }
-  void eval_lights(Vec2, Vec3, std::span<Rgb>, TexelFilter) const override {}
-  std::unique_ptr<DeviceMaterial> upload(ClContext&, std::span<const CompressedMaterial* const>,
-                                         const ParamSet&) const override {
-    return nullptr;
-  }
-  void save(ArchiveWriter&) const override {}
-
- private:
   Btf values_;
+  float scale_, bump_;
 };
 
 const Btf& small_btf() {
@@ -90,7 +65,7 @@ const Btf& small_btf() {
 
 TEST(MaterialError, IsZeroForTheBtfItselfAndTheScaleOtherwise) {
   const Btf& b = small_btf();
-  const MaterialError same = material_error(ScaledMaterial(b, 1.0f), b);
+  const MaterialError same = material_error(TableMaterial(b, 1.0f), b);
   EXPECT_EQ(same.relative_l2, 0.0);
   EXPECT_EQ(same.max_abs, 0.0);
   EXPECT_EQ(same.samples, b.value_count());
@@ -102,7 +77,7 @@ TEST(MaterialError, IsZeroForTheBtfItselfAndTheScaleOtherwise) {
   EXPECT_EQ(same.white_light_l2, 0.0);
   // Halving is exact in float: every relative error is 0.5 to double rounding (the floored one
   // is 0.5 where |b| is above the floor and less below it).
-  const MaterialError half = material_error(ScaledMaterial(b, 0.5f), b);
+  const MaterialError half = material_error(TableMaterial(b, 0.5f), b);
   EXPECT_NEAR(half.relative_l2, 0.5, 1e-12);
   EXPECT_NEAR(half.average_relative, 0.5, 1e-12);
   EXPECT_NEAR(half.average_relative_worst_abrdf, 0.5, 1e-12);
@@ -121,7 +96,7 @@ TEST(MaterialError, EveryMeasureOnAHandComputedAbrdf) {
   const std::vector<float> full = {2, 1, 1, 0, 1, 1, 0.01f, 1, 1, 4, 1, 1};
   const std::vector<float> approx = {3, 0, 0, 0.5f, 0, 0, 0.02f, 0, 0, 4, 0, 0};
   const Btf b("hand", 1, 1, 2, full);
-  const MaterialError e = material_error(OtherBtfMaterial(Btf("approx", 1, 1, 2, approx)), b);
+  const MaterialError e = material_error(TableMaterial(Btf("approx", 1, 1, 2, approx)), b);
   const double red01 = static_cast<double>(0.02f) - static_cast<double>(0.01f);
   ASSERT_NEAR(red01, 0.01, 1e-9);
   // red: |d| = 1, 0.5, 0.01, 0 against 2, 0, 0.01, 4; green and blue: |d| = 1 against 1.
@@ -152,7 +127,7 @@ TEST(MaterialError, CosineWeightsAreTheCellMeanCosines) {
   approx[4 * 3] += 1.0f;
   approx[0] += 1.0f;
   const MaterialError e =
-      material_error(OtherBtfMaterial(Btf("approx", 1, 1, 3, approx)), Btf("full", 1, 1, 3, full));
+      material_error(TableMaterial(Btf("approx", 1, 1, 3, approx)), Btf("full", 1, 1, 3, full));
   const HemisphereGrid g(3);
   const std::vector<double> p = g.projected_solid_angles();
   double ref = 0;
@@ -165,7 +140,7 @@ TEST(MaterialError, CosineWeightsAreTheCellMeanCosines) {
 
 TEST(MaterialError, OneChangedSampleGivesItsShareOfTheNorm) {
   const Btf& b = small_btf();
-  const MaterialError e = material_error(ScaledMaterial(b, 1.0f, 0.5f), b);
+  const MaterialError e = material_error(TableMaterial(b, 1.0f, 0.5f), b);
   const double bumped = static_cast<double>(b.value(1, 2, 3).x + 0.5f) - b.value(1, 2, 3).x;
   EXPECT_NEAR(e.max_abs, bumped, 1e-7);
   EXPECT_NEAR(e.relative_l2, bumped / e.reference_l2, 1e-12);
@@ -184,7 +159,7 @@ TEST(MaterialError, RefusesAMaterialOfOtherSampling) {
   p.supersampling = 1;
   p.geometry_grid = 32;
   const Btf other = generate_btf(make_btf_material("lambert", 32), p);
-  EXPECT_THROW(material_error(ScaledMaterial(other, 1.0f), small_btf()), ParameterError);
+  EXPECT_THROW(material_error(TableMaterial(other, 1.0f), small_btf()), ParameterError);
 }
 
 TEST(MaterialLightBasis, ShadingPathsBetweenTransferOutputAndMaterial) {
