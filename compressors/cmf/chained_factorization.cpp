@@ -19,6 +19,8 @@ constexpr int kMaskedRankOneIterations = 30;
 // normal matrix's largest diagonal entry, so that halfway cells no sample reaches keep the
 // chain's value instead of falling to 0.
 constexpr double kRefineAnchor = 1e-10;
+// Alternating sweeps of step 3's K-term split (terms > 1).
+constexpr int kTermSweeps = 50;
 
 double norm(std::span<const double> x) {
   double s = 0;
@@ -27,6 +29,58 @@ double norm(std::span<const double> x) {
 }
 
 }  // namespace
+
+void fit_terms(std::span<const double> target, std::span<const double> w, int terms,
+               std::span<double> p, std::span<double> r, int sweeps) {
+  const int m = static_cast<int>(p.size()) / terms, v = static_cast<int>(r.size()) / terms;
+  PRT_CHECK(terms >= 1 && p.size() == static_cast<std::size_t>(terms) * m &&
+                r.size() == static_cast<std::size_t>(terms) * v &&
+                target.size() == static_cast<std::size_t>(m) * v &&
+                (w.empty() || w.size() == target.size()),
+            "cmf: fit_terms sizes");
+  const auto weight = [&](std::size_t s) { return w.empty() ? 1.0 : w[s]; };
+  // What the other terms leave of sample s for term k (the sample itself when K = 1).
+  const auto left = [&](int k, int j, int e) {
+    const std::size_t s = static_cast<std::size_t>(e) * m + j;
+    double t = target[s];
+    if (terms > 1) {
+      double others = 0;
+      for (int l = 0; l < terms; ++l)
+        if (l != k)
+          others += p[static_cast<std::size_t>(l) * m + j] * r[static_cast<std::size_t>(l) * v + e];
+      t -= weight(s) * others;
+    }
+    return t;
+  };
+  for (int it = 0; it < sweeps; ++it) {
+    for (int k = 0; k < terms; ++k) {
+      double* pk = p.data() + static_cast<std::size_t>(k) * m;
+      const double* rk = r.data() + static_cast<std::size_t>(k) * v;
+      for (int j = 0; j < m; ++j) {
+        double num = 0, den = 0;
+        for (int e = 0; e < v; ++e) {
+          const double b = rk[e] * weight(static_cast<std::size_t>(e) * m + j);
+          num += left(k, j, e) * b;
+          den += b * b;
+        }
+        if (den > 0) pk[j] = std::max(num / den, 0.0);
+      }
+    }
+    for (int k = 0; k < terms; ++k) {
+      const double* pk = p.data() + static_cast<std::size_t>(k) * m;
+      double* rk = r.data() + static_cast<std::size_t>(k) * v;
+      for (int e = 0; e < v; ++e) {
+        double num = 0, den = 0;
+        for (int j = 0; j < m; ++j) {
+          const double b = pk[j] * weight(static_cast<std::size_t>(e) * m + j);
+          num += left(k, j, e) * b;
+          den += b * b;
+        }
+        if (den > 0) rk[e] = std::max(num / den, 0.0);
+      }
+    }
+  }
+}
 
 void rank_one(std::span<const double> a, int rows, int cols, std::span<double> u,
               std::span<double> v) {
@@ -60,8 +114,9 @@ void rank_one(std::span<const double> a, int rows, int cols, std::span<double> u
 }
 
 ChainedFactorization::ChainedFactorization(const ChainOptions& options) : o_(options) {
-  PRT_CHECK(o_.light_side >= 1 && o_.view_side >= 1 && o_.half_side >= 1 && o_.diff_side >= 1,
-            "cmf: grid sides must be positive");
+  PRT_CHECK(o_.light_side >= 1 && o_.view_side >= 1 && o_.half_side >= 1 && o_.diff_side >= 1 &&
+                o_.terms >= 1,
+            "cmf: grid sides and terms must be positive");
   gshd_ = gshd_resampling(o_.light_side, o_.view_side, o_.half_side, o_.diff_side);
   w_ = halfway_weights(o_.light_side, o_.view_side, o_.half_side);
   wt_ = w_.transpose();
@@ -97,9 +152,9 @@ ChainedFactorization::ChainedFactorization(const ChainOptions& options) : o_(opt
 void ChainedFactorization::factor(std::span<const double> f, std::span<double> p,
                                   std::span<double> q, std::span<double> r) const {
   const int m = light_count(), v = view_count(), h = half_count();
-  PRT_CHECK(f.size() == static_cast<std::size_t>(m) * v &&
-                p.size() == static_cast<std::size_t>(m) &&
-                q.size() == static_cast<std::size_t>(h) && r.size() == static_cast<std::size_t>(v),
+  const auto k = static_cast<std::size_t>(o_.terms);
+  PRT_CHECK(f.size() == static_cast<std::size_t>(m) * v && p.size() == k * m &&
+                q.size() == static_cast<std::size_t>(h) && r.size() == k * v,
             "cmf: factor sizes");
   const Eigen::Map<const Eigen::VectorXd> fv(f.data(), static_cast<Eigen::Index>(f.size()));
   const double f_mean = fv.mean();
@@ -182,7 +237,23 @@ void ChainedFactorization::divide_and_split(std::span<const double> f, std::span
     residue[s] = q_io[static_cast<Eigen::Index>(s)] > q_floor
                      ? f[s] / q_io[static_cast<Eigen::Index>(s)]
                      : 0.0;
-  rank_one(residue, m, v, p, r);
+  rank_one(residue, m, v, p.first(static_cast<std::size_t>(m)),
+           r.first(static_cast<std::size_t>(v)));
+  if (o_.terms == 1) return;
+  // Each further term starts as the rank-1 fit of what the terms before it leave, clamped at 0.
+  std::vector<double> rest(residue.size());
+  for (int k = 1; k < o_.terms; ++k) {
+    for (std::size_t s = 0; s < rest.size(); ++s) {
+      const std::size_t j = s % static_cast<std::size_t>(m), e = s / static_cast<std::size_t>(m);
+      double model = 0;
+      for (int l = 0; l < k; ++l)
+        model += p[static_cast<std::size_t>(l) * m + j] * r[static_cast<std::size_t>(l) * v + e];
+      rest[s] = std::max(residue[s] - model, 0.0);
+    }
+    rank_one(rest, m, v, p.subspan(static_cast<std::size_t>(k) * m, static_cast<std::size_t>(m)),
+             r.subspan(static_cast<std::size_t>(k) * v, static_cast<std::size_t>(v)));
+  }
+  fit_terms(residue, {}, o_.terms, p, r, kTermSweeps);
 }
 
 void ChainedFactorization::refine(std::span<const double> f, std::span<double> p,
@@ -198,7 +269,10 @@ void ChainedFactorization::refine(std::span<const double> f, std::span<double> p
     std::fill(normal.valuePtr(), normal.valuePtr() + normal.nonZeros(), 0.0);
     rhs.setZero();
     for (int s = 0; s < w_.rows(); ++s) {
-      const double a = p[s % m] * r[s / m];
+      double a = p[s % m] * r[s / m];
+      for (int k = 1; k < o_.terms; ++k)
+        a +=
+            p[static_cast<std::size_t>(k) * m + s % m] * r[static_cast<std::size_t>(k) * v + s / m];
       const double a2 = a * a;
       int slot = sample_begin_[s];
       for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator i(w_, s); i; ++i) {
@@ -221,25 +295,9 @@ void ChainedFactorization::refine(std::span<const double> f, std::span<double> p
     if (solver.info() != Eigen::Success) return;
     qv = solver.solve(rhs).cwiseMax(0.0);
     const Eigen::VectorXd q_io = w_ * qv;
-    // P given Q and R, then R given P and Q.
-    for (int j = 0; j < m; ++j) {
-      double num = 0, den = 0;
-      for (int e = 0; e < v; ++e) {
-        const double b = r[e] * q_io[e * m + j];
-        num += f[static_cast<std::size_t>(e) * m + j] * b;
-        den += b * b;
-      }
-      if (den > 0) p[j] = std::max(num / den, 0.0);
-    }
-    for (int e = 0; e < v; ++e) {
-      double num = 0, den = 0;
-      for (int j = 0; j < m; ++j) {
-        const double b = p[j] * q_io[e * m + j];
-        num += f[static_cast<std::size_t>(e) * m + j] * b;
-        den += b * b;
-      }
-      if (den > 0) r[e] = std::max(num / den, 0.0);
-    }
+    // Each P_k given Q and the R, then each R_k given Q and the P.
+    fit_terms(f, std::span<const double>(q_io.data(), static_cast<std::size_t>(q_io.size())),
+              o_.terms, p, r, 1);
   }
 }
 

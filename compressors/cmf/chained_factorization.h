@@ -13,11 +13,18 @@
 //      narrower than a grid cell over its neighbours; the projection puts every sample at its
 //      own halfway direction;
 //   3. divide the in/out samples by Q read back at each pair's halfway direction (the weights
-//      shading uses) and take the rank-1 SVD of the residue: P and R;
+//      shading uses) and take the rank-1 SVD of the residue: P and R. With `terms` K > 1 (the
+//      paper's multiple-term approximation of a step, eq. 3) the residue is split into K
+//      non-negative terms sum_k P_k R_k^T instead of the K leading singular pairs, whose
+//      factors past the first change sign and could not be stored as the non-negative 8-bit
+//      textures (the paper names non-negative factorisation as the alternative): term 1 the
+//      rank-1 SVD, term k the rank-1 SVD of the positive part of what terms 1 .. k-1 leave, then
+//      sweeps of hierarchical alternating least squares (each P_k, then each R_k, the exact
+//      non-negative minimiser with the others fixed);
 //   4. optionally (`refine` > 0, not in the paper) alternate least squares on the final model
 //      in the original samples: Q by a sparse normal-equation solve (pulled weakly towards its
-//      previous value and clamped at 0), then P and R in closed form (each the exact minimiser
-//      with the others fixed).
+//      previous value and clamped at 0), then each P_k and R_k in closed form (each the exact
+//      non-negative minimiser with the others fixed).
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <span>
@@ -35,6 +42,7 @@ struct ChainOptions {
   int diff_side = 0;  ///< GSHD difference grid of step 1
   HalfwayRule halfway = HalfwayRule::kSvd;
   int refine = 0;
+  int terms = 1;  ///< P R terms of step 3 (1 .. kMaxFactorTerms)
 };
 
 /// The sampling-dependent parts of the chain, shared by every texel and channel.
@@ -46,8 +54,8 @@ class ChainedFactorization {
   int view_count() const { return o_.view_side * o_.view_side; }
   int half_count() const { return o_.half_side * o_.half_side; }
 
-  /// Factors one channel: f holds M V samples (s = view * M + light), all >= 0; p (M), q (H)
-  /// and r (V) receive non-negative factors. Thread-safe.
+  /// Factors one channel: f holds M V samples (s = view * M + light), all >= 0; p (terms x M,
+  /// term k at k M), q (H) and r (terms x V) receive non-negative factors. Thread-safe.
   void factor(std::span<const double> f, std::span<double> p, std::span<double> q,
               std::span<double> r) const;
 
@@ -68,6 +76,12 @@ class ChainedFactorization {
   std::vector<int> sample_begin_;
   std::vector<int> sample_slot_;
 };
+
+/// Sweeps of the weighted non-negative K-term fit target_s ~ w_s sum_k p_k[j] r_k[e] (s = e M +
+/// j, M = p.size() / K, V = r.size() / K), each P_k then each R_k set to its exact non-negative
+/// minimiser with the rest fixed (left as it is where no sample weighs on it); w empty: all 1.
+void fit_terms(std::span<const double> target, std::span<const double> w, int terms,
+               std::span<double> p, std::span<double> r, int sweeps);
 
 /// Rank-1 approximation u v^T of a rows x cols column-major non-negative matrix by power
 /// iteration from the column means (the Perron vectors, so u, v >= 0); u and v share the

@@ -36,7 +36,16 @@ MaterialEntry registry_entry() {
        2000,
        {},
        "alternating least-squares sweeps on P Q R in the original samples after the chain "
-       "(not in the paper; refine = 0 with halfway = mean is the paper's chain)"}};
+       "(not in the paper; refine = 0 with halfway = mean is the paper's chain)"},
+      {"terms",
+       ParamType::kInt,
+       "1",
+       1,
+       kMaxFactorTerms,
+       {},
+       "P R terms per ABRDF channel after the halfway factor (the paper's multiple-term "
+       "approximation, eq. 3), non-negative so that they stay 8-bit textures: each adds a P and "
+       "an R index and a scale per texel; 1 is the paper's single term"}};
   for (auto& spec : factor_coding_params()) e.params.push_back(std::move(spec));
   e.lossless = false;
   e.create = [](const ParamSet& p) -> std::unique_ptr<MaterialCompressor> {
@@ -48,6 +57,9 @@ MaterialEntry registry_entry() {
                 : rule == "project" ? HalfwayRule::kProject
                                     : HalfwayRule::kSvd;
     o.refine = static_cast<int>(p.get_int("refine"));
+    o.terms = static_cast<int>(p.get_int("terms"));
+    FactorCoding coding = factor_coding(p);
+    coding.terms = o.terms;
     const auto setup = [o](const Btf& btf) -> ChannelFactorizer {
       ChainOptions with = o;
       with.light_side = btf.light_side();
@@ -55,7 +67,7 @@ MaterialEntry registry_entry() {
       if (with.diff_side == 0) with.diff_side = with.half_side;
       return channel_factorizer(std::make_shared<const ChainedFactorization>(with));
     };
-    return std::make_unique<FactoredCompressor>(std::string(kName), setup, factor_coding(p),
+    return std::make_unique<FactoredCompressor>(std::string(kName), setup, coding,
                                                 nlohmann::json(p.canonical()));
   };
   e.load = factored_loader(std::string(kName));

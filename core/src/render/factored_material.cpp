@@ -24,8 +24,13 @@
 namespace prt {
 namespace {
 
-// Version 2 added "halfway_interpolation"; a version 1 state is linear.
-constexpr std::uint32_t kStateVersion = 2;
+// Version 2 added "halfway_interpolation" (a version 1 state is linear), version 3 "terms" (an
+// earlier state has one).
+constexpr std::uint32_t kStateVersion = 3;
+// Coordinate-descent sweeps of the K-term scale refit at most, and the relative change of the
+// scales that ends it sooner.
+constexpr int kScaleSweeps = 200;
+constexpr double kScaleTolerance = 1e-12;
 constexpr char kMetaKey[] = "factored";
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -186,21 +191,23 @@ const char* halfway_interpolation_name(HalfwayInterpolation mode) {
   return mode == HalfwayInterpolation::kGeometric ? "geometric" : "linear";
 }
 
-AbrdfFactors::AbrdfFactors(int texel_count, int m, int h, int v)
+AbrdfFactors::AbrdfFactors(int texel_count, int m, int h, int v, int term_count)
     : texels(texel_count),
       light_count(m),
       half_count(h),
       view_count(v),
-      p(static_cast<std::size_t>(texel_count) * m * 3),
+      terms(term_count),
+      p(static_cast<std::size_t>(texel_count) * term_count * m * 3),
       q(static_cast<std::size_t>(texel_count) * h * 3),
-      r(static_cast<std::size_t>(texel_count) * v * 3) {}
+      r(static_cast<std::size_t>(texel_count) * term_count * v * 3) {}
 
 FactoredMaterial::FactoredMaterial(State state) : state_(std::move(state)) {
   const MaterialSampling& s = state_.sampling;
   const auto texels = static_cast<std::size_t>(s.texel_count());
-  PRT_CHECK(state_.half_side >= 1 && state_.index_p.size() == texels &&
-                state_.index_q.size() == texels && state_.index_r.size() == texels &&
-                state_.scale.size() == texels * 3 &&
+  const auto rows = texels * static_cast<std::size_t>(std::max(state_.terms, 0));
+  PRT_CHECK(state_.half_side >= 1 && state_.terms >= 1 && state_.terms <= kMaxFactorTerms &&
+                state_.index_p.size() == rows && state_.index_q.size() == texels &&
+                state_.index_r.size() == rows && state_.scale.size() == rows * 3 &&
                 state_.codebook_p.size() ==
                     static_cast<std::size_t>(state_.clusters_p) * s.light_count() * 3 &&
                 state_.codebook_q.size() ==
@@ -212,24 +219,31 @@ FactoredMaterial::FactoredMaterial(State state) : state_(std::move(state)) {
   for (const Vec3& e : light_directions_f(s.view_side)) views_.push_back(clamp_to_hemisphere(e));
 }
 
-const float* FactoredMaterial::p_entry(int texel) const {
+const float* FactoredMaterial::p_entry(int texel, int term) const {
   return state_.codebook_p.data() +
-         static_cast<std::size_t>(state_.index_p[texel]) * state_.sampling.light_count() * 3;
+         static_cast<std::size_t>(
+             state_.index_p[static_cast<std::size_t>(texel) * state_.terms + term]) *
+             state_.sampling.light_count() * 3;
 }
 const float* FactoredMaterial::q_entry(int texel) const {
   return state_.codebook_q.data() +
          static_cast<std::size_t>(state_.index_q[texel]) * half_count() * 3;
 }
-const float* FactoredMaterial::r_entry(int texel) const {
+const float* FactoredMaterial::r_entry(int texel, int term) const {
   return state_.codebook_r.data() +
-         static_cast<std::size_t>(state_.index_r[texel]) * state_.sampling.view_count() * 3;
+         static_cast<std::size_t>(
+             state_.index_r[static_cast<std::size_t>(texel) * state_.terms + term]) *
+             state_.sampling.view_count() * 3;
+}
+const float* FactoredMaterial::scale_of(int texel, int term) const {
+  return state_.scale.data() + (static_cast<std::size_t>(texel) * state_.terms + term) * 3;
 }
 
 std::uint64_t FactoredMaterial::factored_bytes() const {
   const MaterialSampling& s = state_.sampling;
+  const auto k = static_cast<std::uint64_t>(state_.terms);
   return static_cast<std::uint64_t>(s.texel_count()) *
-         (static_cast<std::uint64_t>(s.light_count() + half_count() + s.view_count()) * 3 + 3) *
-         sizeof(float);
+         ((k * (s.light_count() + s.view_count()) + half_count()) * 3 + 3 * k) * sizeof(float);
 }
 
 StorageReport FactoredMaterial::storage() const {
@@ -244,34 +258,52 @@ StorageReport FactoredMaterial::storage() const {
         fmt::format("{} entries x {} directions x RGB, {}", clusters, n,
                     state_.quantized ? "u8 with a float scale per entry" : "f32")};
   };
-  const std::uint64_t index = texels * (index_bytes(static_cast<std::uint64_t>(state_.clusters_p)) +
-                                        index_bytes(static_cast<std::uint64_t>(state_.clusters_q)) +
-                                        index_bytes(static_cast<std::uint64_t>(state_.clusters_r)));
-  return {
-      {book("codebook_p", state_.clusters_p, s.light_count()),
-       book("codebook_q", state_.clusters_q, half_count()),
-       book("codebook_r", state_.clusters_r, s.view_count()),
-       {"index_map", index, "P, Q and R codebook indices per texel"},
-       {"scale_map", texels * 3 * value + (state_.quantized ? 12 : 0),
-        state_.quantized ? "u8 RGB per texel, one float scale per channel" : "f32 RGB per texel"}}};
+  const auto k = static_cast<std::uint64_t>(state_.terms);
+  const std::uint64_t index =
+      texels * (k * index_bytes(static_cast<std::uint64_t>(state_.clusters_p)) +
+                index_bytes(static_cast<std::uint64_t>(state_.clusters_q)) +
+                k * index_bytes(static_cast<std::uint64_t>(state_.clusters_r)));
+  const std::string per = k == 1 ? "per texel" : fmt::format("per texel and term ({} terms)", k);
+  return {{book("codebook_p", state_.clusters_p, s.light_count()),
+           book("codebook_q", state_.clusters_q, half_count()),
+           book("codebook_r", state_.clusters_r, s.view_count()),
+           {"index_map", index,
+            k == 1 ? "P, Q and R codebook indices per texel"
+                   : fmt::format("P and R codebook indices {}, Q's per texel", per)},
+           {"scale_map", texels * k * 3 * value + (state_.quantized ? 12 : 0),
+            state_.quantized ? fmt::format("u8 RGB {}, one float scale per channel", per)
+                             : fmt::format("f32 RGB {}", per)}}};
 }
 
 double FactoredMaterial::flops_per_pixel() const {
-  // R at the view (4 samples), then per light the halfway lookup of Q (4 samples) and the
-  // product s P Q R with the dot product's multiply-add; the halfway direction itself is a
-  // texture coordinate, shared by the channels, as in the paper's vertex program.
-  // The geometric interpolation adds 4 logarithms and an exponential per light, counted as one
-  // operation each (a GPU's special-function unit).
+  // Per term R at the view (4 samples) times the scale, then per light the halfway lookup of Q
+  // (4 samples), per term the product with P and its sum, and the dot product's multiply-add;
+  // the halfway direction itself is a texture coordinate, shared by the channels, as in the
+  // paper's vertex program. The geometric interpolation adds 4 logarithms and an exponential per
+  // light, counted as one operation each (a GPU's special-function unit).
   const double m = state_.sampling.light_count();
+  const double k = state_.terms;
   const double geometric = state_.interpolation == HalfwayInterpolation::kGeometric ? 5.0 : 0.0;
-  return 8.0 + 2.0 + m * (8.0 + 2.0 + 2.0 + geometric);
+  return k * (8.0 + 2.0) + m * (8.0 + geometric + 2.0 * k + 2.0);
+}
+
+void FactoredMaterial::term_values(int texel, int view, int light, std::span<Rgb> out) const {
+  PRT_CHECK(out.size() >= static_cast<std::size_t>(state_.terms),
+            "material {}: {} values for {} terms", state_.backend, out.size(), state_.terms);
+  const BtfViewSamples h = halfway_samples(state_.half_side, lights_[light], views_[view]);
+  const Rgb qv = interpolate_q(q_entry(texel), h, state_.interpolation);
+  for (int k = 0; k < state_.terms; ++k)
+    out[static_cast<std::size_t>(k)] = load3(scale_of(texel, k)) *
+                                       load3(p_entry(texel, k) + light * 3) * qv *
+                                       load3(r_entry(texel, k) + view * 3);
 }
 
 Rgb FactoredMaterial::reflectance(int texel, int view, int light) const {
-  const BtfViewSamples h = halfway_samples(state_.half_side, lights_[light], views_[view]);
-  const Rgb qv = interpolate_q(q_entry(texel), h, state_.interpolation);
-  const Rgb s = load3(state_.scale.data() + static_cast<std::size_t>(texel) * 3);
-  return s * load3(p_entry(texel) + light * 3) * qv * load3(r_entry(texel) + view * 3);
+  Rgb terms[kMaxFactorTerms];
+  term_values(texel, view, light, terms);
+  Rgb sum = terms[0];
+  for (int k = 1; k < state_.terms; ++k) sum += terms[k];
+  return sum;
 }
 
 void FactoredMaterial::eval_lights(Vec2 uv, Vec3 view_local, std::span<Rgb> out,
@@ -284,22 +316,23 @@ void FactoredMaterial::eval_lights(Vec2 uv, Vec3 view_local, std::span<Rgb> out,
   const BtfViewSamples views = btf_view_samples(s.view_side, e);
   const BtfTexelSamples texels = btf_texel_samples(s.resolution, uv, filter);
   std::fill(out.begin(), out.end(), Rgb(0.0f));
-  // The texels' light-independent part first, as the kernel folds it.
-  Rgb coef[4];
-  for (int t = 0; t < texels.count; ++t) {
-    const float* r = r_entry(texels.texel[t]);
-    Rgb re(0.0f);
-    for (int k = 0; k < 4; ++k) re += views.weight[k] * load3(r + views.view[k] * 3);
-    coef[t] = (texels.weight[t] *
-               load3(state_.scale.data() + static_cast<std::size_t>(texels.texel[t]) * 3)) *
-              re;
-  }
+  // The texels' light-independent part of each term first, as the kernel folds it.
+  const int terms = state_.terms;
+  Rgb coef[4 * kMaxFactorTerms];
+  for (int t = 0; t < texels.count; ++t)
+    for (int k = 0; k < terms; ++k) {
+      const float* r = r_entry(texels.texel[t], k);
+      Rgb re(0.0f);
+      for (int i = 0; i < 4; ++i) re += views.weight[i] * load3(r + views.view[i] * 3);
+      coef[t * terms + k] = (texels.weight[t] * load3(scale_of(texels.texel[t], k))) * re;
+    }
   for (int j = 0; j < m; ++j) {
     const BtfViewSamples h = halfway_samples(state_.half_side, lights_[j], e);
     Rgb sum(0.0f);
     for (int t = 0; t < texels.count; ++t) {
       const Rgb qv = interpolate_q(q_entry(texels.texel[t]), h, state_.interpolation);
-      sum += coef[t] * load3(p_entry(texels.texel[t]) + j * 3) * qv;
+      for (int k = 0; k < terms; ++k)
+        sum += coef[t * terms + k] * load3(p_entry(texels.texel[t], k) + j * 3) * qv;
     }
     out[j] = sum;
   }
@@ -345,22 +378,30 @@ class FactoredDeviceMaterial final : public DeviceMaterial {
         const std::uint64_t p0 = append(st.codebook_p), q0 = append(st.codebook_q),
                             r0 = append(st.codebook_r);
         (void)offset(books.size());
-        for (int t = 0; t < s.texel_count(); ++t) {
-          texels.push_back(
-              cl_uint4{{offset(p0 + std::uint64_t{st.index_p[t]} * s.light_count() * 3),
-                        offset(q0 + std::uint64_t{st.index_q[t]} * part->half_count() * 3),
-                        offset(r0 + std::uint64_t{st.index_r[t]} * s.view_count() * 3), 0u}});
-          const float* sc = st.scale.data() + static_cast<std::size_t>(t) * 3;
-          scales.push_back(cl_float4{{sc[0], sc[1], sc[2], 0.0f}});
-        }
+        // One row per texel and term, a texel's terms consecutive, each with the texel's Q.
+        for (int t = 0; t < s.texel_count(); ++t)
+          for (int k = 0; k < st.terms; ++k) {
+            const std::size_t row = static_cast<std::size_t>(t) * st.terms + k;
+            texels.push_back(
+                cl_uint4{{offset(p0 + std::uint64_t{st.index_p[row]} * s.light_count() * 3),
+                          offset(q0 + std::uint64_t{st.index_q[t]} * part->half_count() * 3),
+                          offset(r0 + std::uint64_t{st.index_r[row]} * s.view_count() * 3), 0u}});
+            const float* sc = st.scale.data() + row * 3;
+            scales.push_back(cl_float4{{sc[0], sc[1], sc[2], 0.0f}});
+          }
         (void)offset(texels.size());
       }
-      // The kernel reads half_side from the low 16 bits and the interpolation from bit 16.
-      PRT_CHECK(st.half_side < (1 << 16), "material {}: half side {} too large for the kernel",
-                backend, st.half_side);
+      // The kernel reads half_side from the low 16 bits, the interpolation from bit 16 and the
+      // terms from bits 20 to 23.
+      PRT_CHECK(st.half_side < (1 << 16) && st.terms >= 1 && st.terms <= kMaxFactorTerms,
+                "material {}: half side {} or {} terms out of the kernel's range", backend,
+                st.half_side, st.terms);
       const cl_int geometric = st.interpolation == HalfwayInterpolation::kGeometric ? 1 : 0;
-      info.push_back(cl_int4{{s.resolution, s.view_side, st.half_side | (geometric << 16),
-                              static_cast<cl_int>(it->second)}});
+      info.push_back(
+          cl_int4{{s.resolution, s.view_side, st.half_side | (geometric << 16) | (st.terms << 20),
+                   static_cast<cl_int>(it->second)}});
+      max_terms_ = std::max(max_terms_, st.terms);
+      terms_.push_back(st.terms);
     }
     std::vector<cl_float4> lights;
     for (const Vec3& d : light_directions_f(light_side))
@@ -380,14 +421,17 @@ class FactoredDeviceMaterial final : public DeviceMaterial {
 
   std::string label() const override { return "factored_material.cl (" + label_ + ")"; }
   std::string source() const override { return std::string(kernel_source("factored_material")); }
+  KernelDefines defines() const override { return {{"FM_TERMS", std::to_string(max_terms_)}}; }
   void set_args(cl::Kernel& kernel, unsigned first) const override {
     set_args_from(kernel, first, books_, texels_, scales_, info_, lights_);
   }
   std::uint64_t device_bytes() const override { return bytes_; }
-  std::uint64_t bytes_per_hit(std::size_t /*part*/, TexelFilter filter) const override {
+  std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const override {
     const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
-    // Index and scale, R's 4 view samples, then per light P and Q's 4 halfway samples.
-    return texels * (32 + 4 * 12 + static_cast<std::uint64_t>(m_) * (12 + 4 * 12)) +
+    const auto k = static_cast<std::uint64_t>(terms_.at(part));
+    // Per term the index and scale and R's 4 view samples, then per light each term's P and
+    // Q's 4 halfway samples.
+    return texels * (k * (32 + 4 * 12) + static_cast<std::uint64_t>(m_) * (k * 12 + 4 * 12)) +
            static_cast<std::uint64_t>(m_) * 16;
   }
 
@@ -395,6 +439,8 @@ class FactoredDeviceMaterial final : public DeviceMaterial {
   cl::Buffer books_, texels_, scales_, info_, lights_;
   std::string label_;
   int m_ = 0;
+  int max_terms_ = 1;
+  std::vector<int> terms_;  // per part
   std::uint64_t bytes_ = 0;
 };
 
@@ -426,6 +472,7 @@ void FactoredMaterial::save(ArchiveWriter& w) const {
                         {"view_side", s.view_side},
                         {"light_side", s.light_side},
                         {"half_side", st.half_side},
+                        {"terms", st.terms},
                         {"clusters", {st.clusters_p, st.clusters_q, st.clusters_r}},
                         {"quantized", st.quantized},
                         {"code_gamma", st.code_gamma},
@@ -447,6 +494,7 @@ void FactoredMaterial::save(ArchiveWriter& w) const {
     w.add_section("codebook_r", st.codebook_r);
     w.add_section("scale_map", st.scale);
   }
+  // P's and R's indices and the scale map hold texels x terms rows.
   add_index_section(w, "index_p", st.index_p, static_cast<std::uint64_t>(st.clusters_p));
   add_index_section(w, "index_q", st.index_q, static_cast<std::uint64_t>(st.clusters_q));
   add_index_section(w, "index_r", st.index_r, static_cast<std::uint64_t>(st.clusters_r));
@@ -460,8 +508,8 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
   try {
     const auto meta = r.meta_value<nlohmann::json>(kMetaKey);
     const int version = meta.at("format_version").get<int>();
-    if (version != 1 && version != static_cast<int>(kStateVersion))
-      throw fail(fmt::format("state version {} is not 1 or {}", meta.at("format_version").dump(),
+    if (version < 1 || version > static_cast<int>(kStateVersion))
+      throw fail(fmt::format("state version {} is not 1 .. {}", meta.at("format_version").dump(),
                              kStateVersion));
     State st;
     st.backend = meta.at("backend").get<std::string>();
@@ -469,6 +517,9 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
     st.sampling = {meta.at("material").get<std::string>(), meta.at("resolution").get<int>(),
                    meta.at("view_side").get<int>(), meta.at("light_side").get<int>()};
     st.half_side = meta.at("half_side").get<int>();
+    if (version >= 3) st.terms = meta.at("terms").get<int>();
+    if (st.terms < 1 || st.terms > kMaxFactorTerms)
+      throw fail(fmt::format("{} terms is not 1 .. {}", st.terms, kMaxFactorTerms));
     const auto& k = meta.at("clusters");
     st.clusters_p = k.at(0).get<int>();
     st.clusters_q = k.at(1).get<int>();
@@ -493,9 +544,11 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
           fmt::format("resolution {}, view side {}, light side {}, half side {} out of range",
                       s.resolution, s.view_side, s.light_side, st.half_side));
     const auto texels = static_cast<std::uint64_t>(s.texel_count());
-    for (int c : {st.clusters_p, st.clusters_q, st.clusters_r})
-      if (c < 1 || static_cast<std::uint64_t>(c) > texels)
-        throw fail(fmt::format("a codebook of {} entries for {} texels", c, texels));
+    const std::uint64_t rows = texels * static_cast<std::uint64_t>(st.terms);
+    for (const auto& [c, n] : {std::pair{st.clusters_p, rows}, std::pair{st.clusters_q, texels},
+                               std::pair{st.clusters_r, rows}})
+      if (c < 1 || static_cast<std::uint64_t>(c) > n)
+        throw fail(fmt::format("a codebook of {} entries for {} factors", c, n));
     if (!(std::isfinite(st.error) && st.error >= 0)) throw fail("the stored error is not finite");
     const auto np = static_cast<std::uint64_t>(st.clusters_p) * s.light_count() * 3;
     const auto nq = static_cast<std::uint64_t>(st.clusters_q) * st.half_side * st.half_side * 3;
@@ -510,7 +563,7 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
           r.section<float>("entry_scale_q", static_cast<std::uint64_t>(st.clusters_q));
       st.entry_scale_r =
           r.section<float>("entry_scale_r", static_cast<std::uint64_t>(st.clusters_r));
-      st.scale_codes = r.section<std::uint8_t>("scale_map", texels * 3);
+      st.scale_codes = r.section<std::uint8_t>("scale_map", rows * 3);
       st.scale_global = r.section<float>("scale_global", 3);
       for (const auto* v :
            {&st.entry_scale_p, &st.entry_scale_q, &st.entry_scale_r, &st.scale_global})
@@ -525,22 +578,21 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
       st.codebook_r = decode(blocks(static_cast<std::size_t>(st.clusters_r), nr / st.clusters_r,
                                     st.codes_r, st.entry_scale_r),
                              st.code_gamma);
-      st.scale = decode_scale(s.texel_count(), st.scale_codes, st.scale_global, st.code_gamma);
+      st.scale =
+          decode_scale(static_cast<int>(rows), st.scale_codes, st.scale_global, st.code_gamma);
     } else {
       st.codebook_p = r.section<float>("codebook_p", np);
       st.codebook_q = r.section<float>("codebook_q", nq);
       st.codebook_r = r.section<float>("codebook_r", nr);
-      st.scale = r.section<float>("scale_map", texels * 3);
+      st.scale = r.section<float>("scale_map", rows * 3);
       for (const auto* v : {&st.codebook_p, &st.codebook_q, &st.codebook_r, &st.scale})
         if (!std::all_of(v->begin(), v->end(), [](float x) { return std::isfinite(x) && x >= 0; }))
           throw fail("a factor or scale value is negative or not finite");
     }
-    st.index_p =
-        read_index_section(r, "index_p", texels, static_cast<std::uint64_t>(st.clusters_p));
+    st.index_p = read_index_section(r, "index_p", rows, static_cast<std::uint64_t>(st.clusters_p));
     st.index_q =
         read_index_section(r, "index_q", texels, static_cast<std::uint64_t>(st.clusters_q));
-    st.index_r =
-        read_index_section(r, "index_r", texels, static_cast<std::uint64_t>(st.clusters_r));
+    st.index_r = read_index_section(r, "index_r", rows, static_cast<std::uint64_t>(st.clusters_r));
     return std::make_unique<FactoredMaterial>(std::move(st));
   } catch (const nlohmann::json::exception& e) {
     throw fail(fmt::format("bad metadata ({})", e.what()));
@@ -550,13 +602,14 @@ std::unique_ptr<FactoredMaterial> FactoredMaterial::load(const ArchiveReader& r,
 // ---- encoding ----
 
 AbrdfFactors factor_texels(const Btf& btf, int half_count, const ChannelFactorizer& factor,
-                           const std::string& backend, Progress& progress) {
+                           const std::string& backend, Progress& progress, int terms) {
   const int texels = btf.texel_count(), m = btf.light_count(), v = btf.view_count();
-  AbrdfFactors out(texels, m, half_count, v);
+  PRT_CHECK(terms >= 1 && terms <= kMaxFactorTerms, "material {}: {} terms", backend, terms);
+  AbrdfFactors out(texels, m, half_count, v, terms);
   std::atomic<int> bad{-1};  // the first texel * 3 + channel with a bad factor
   tbb::parallel_for(0, texels, [&](int t) {
-    std::vector<double> f(static_cast<std::size_t>(m) * v), p(static_cast<std::size_t>(m)),
-        q(static_cast<std::size_t>(half_count)), r(static_cast<std::size_t>(v));
+    std::vector<double> f(static_cast<std::size_t>(m) * v), p(static_cast<std::size_t>(terms) * m),
+        q(static_cast<std::size_t>(half_count)), r(static_cast<std::size_t>(terms) * v);
     const float* base = btf.data().data() + btf.offset(t, 0, 0);
     for (int c = 0; c < 3; ++c) {
       for (std::size_t s = 0; s < f.size(); ++s) f[s] = base[s * 3 + c];
@@ -592,31 +645,35 @@ std::unique_ptr<FactoredMaterial> encode_factored_material(
   const int texels = full.texel_count();
   PRT_CHECK(factors.texels == texels && factors.light_count == full.light_count() &&
                 factors.view_count == full.view_count() &&
-                factors.half_count == half_side * half_side,
-            "material {}: the factors do not match the BTF's sampling", backend);
+                factors.half_count == half_side * half_side && factors.terms == coding.terms &&
+                factors.terms >= 1 && factors.terms <= kMaxFactorTerms,
+            "material {}: the factors do not match the BTF's sampling or the terms", backend);
+  const int terms = factors.terms, rows = texels * terms;
   if (coding.clusters < 0)
     throw ParameterError(
         fmt::format("material {}: clusters {} is negative", backend, coding.clusters));
   std::vector<float> p = factors.p, q = factors.q, r = factors.r;
-  const std::vector<float> mp = normalise(p, texels, factors.light_count);
+  const std::vector<float> mp = normalise(p, rows, factors.light_count);
   const std::vector<float> mq = normalise(q, texels, factors.half_count);
-  const std::vector<float> mr = normalise(r, texels, factors.view_count);
+  const std::vector<float> mr = normalise(r, rows, factors.view_count);
 
   FactoredMaterial::State st;
   st.backend = backend;
   st.sampling = sampling_of(full);
   st.half_side = half_side;
+  st.terms = terms;
   st.quantized = coding.quantize;
   st.code_gamma = coding.quantize ? coding.code_gamma : 1.0;
   st.interpolation = coding.interpolation;
   st.parameters = std::move(parameters);
-  st.scale.resize(static_cast<std::size_t>(texels) * 3);
-  for (std::size_t i = 0; i < st.scale.size(); ++i) st.scale[i] = mp[i] * mq[i] * mr[i];
+  st.scale.resize(static_cast<std::size_t>(rows) * 3);
+  for (std::size_t i = 0; i < st.scale.size(); ++i)
+    st.scale[i] = mp[i] * mq[(i / 3 / terms) * 3 + i % 3] * mr[i];
 
   auto t0 = std::chrono::steady_clock::now();
-  Codebook bp = cluster(p, texels, factors.light_count, coding, 0);
+  Codebook bp = cluster(p, rows, factors.light_count, coding, 0);
   Codebook bq = cluster(q, texels, factors.half_count, coding, 1);
-  Codebook br = cluster(r, texels, factors.view_count, coding, 2);
+  Codebook br = cluster(r, rows, factors.view_count, coding, 2);
   if (times) times->clustering_seconds = seconds_since(t0);
   st.clusters_p = bp.clusters;
   st.clusters_q = bq.clusters;
@@ -644,32 +701,55 @@ std::unique_ptr<FactoredMaterial> encode_factored_material(
   st.codebook_q = std::move(bq.entries);
   st.codebook_r = std::move(br.entries);
   if (coding.refit_scale) {
-    // The scale that minimises each texel channel's squared error against the BTF with the
-    // codebook entries it was given (their product g evaluated with scale 1 and the material's
-    // halfway interpolation, since the copy keeps it): s = <f, g> /
-    // <g, g>. The maxima of the normalisation are that only for an unclustered, unquantised
-    // entry of a factorisation that is itself least squares.
+    // The scales that minimise each texel channel's squared error against the BTF with the
+    // codebook entries it was given (each term's product g_k evaluated with scale 1 and the
+    // material's halfway interpolation, since the copy keeps it), non-negative: coordinate
+    // descent on the normal equations G s = b, G_kl = <g_k, g_l>, b_k = <f, g_k>, from the
+    // normalisation's scales; one term takes s = max(<f, g> / <g, g>, 0) in its first sweep. The
+    // maxima of the normalisation are the minimiser only for an unclustered, unquantised entry
+    // of a factorisation that is itself least squares.
     FactoredMaterial::State unit = st;
     std::fill(unit.scale.begin(), unit.scale.end(), 1.0f);
     unit.quantized = false;
     const FactoredMaterial g(std::move(unit));
     tbb::parallel_for(0, texels, [&](int t) {
-      double num[3] = {0, 0, 0}, den[3] = {0, 0, 0};
+      constexpr int kk = kMaxFactorTerms;
+      double gram[kk][kk][3] = {}, b[kk][3] = {};
+      Rgb gv[kk];
       for (int v = 0; v < full.view_count(); ++v)
         for (int j = 0; j < full.light_count(); ++j) {
-          const Rgb gv = g.reflectance(t, v, j), fv = full.value(t, v, j);
-          for (int c = 0; c < 3; ++c) {
-            num[c] += static_cast<double>(fv[c]) * gv[c];
-            den[c] += static_cast<double>(gv[c]) * gv[c];
-          }
+          g.term_values(t, v, j, gv);
+          const Rgb fv = full.value(t, v, j);
+          for (int k = 0; k < terms; ++k)
+            for (int c = 0; c < 3; ++c) {
+              b[k][c] += static_cast<double>(fv[c]) * gv[k][c];
+              for (int l = 0; l < terms; ++l)
+                gram[k][l][c] += static_cast<double>(gv[k][c]) * gv[l][c];
+            }
         }
-      for (int c = 0; c < 3; ++c)
-        st.scale[static_cast<std::size_t>(t) * 3 + c] =
-            den[c] > 0 ? static_cast<float>(std::max(num[c] / den[c], 0.0)) : 0.0f;
+      float* out = st.scale.data() + static_cast<std::size_t>(t) * terms * 3;
+      for (int c = 0; c < 3; ++c) {
+        double x[kk];
+        for (int k = 0; k < terms; ++k) x[k] = out[k * 3 + c];
+        for (int sweep = 0; sweep < (terms == 1 ? 1 : kScaleSweeps); ++sweep) {
+          double change = 0, size = 0;
+          for (int k = 0; k < terms; ++k) {
+            double rhs = b[k][c];
+            for (int l = 0; l < terms; ++l)
+              if (l != k) rhs -= gram[k][l][c] * x[l];
+            const double next = gram[k][k][c] > 0 ? std::max(rhs / gram[k][k][c], 0.0) : 0.0;
+            change = std::max(change, std::abs(next - x[k]));
+            size = std::max(size, next);
+            x[k] = next;
+          }
+          if (change <= kScaleTolerance * size) break;
+        }
+        for (int k = 0; k < terms; ++k) out[k * 3 + c] = static_cast<float>(x[k]);
+      }
     });
   }
   if (coding.quantize)
-    quantize_scale(st.scale, texels, st.code_gamma, st.scale_codes, st.scale_global);
+    quantize_scale(st.scale, rows, st.code_gamma, st.scale_codes, st.scale_global);
   auto material = std::make_unique<FactoredMaterial>(st);
   st.error = material_error(*material, full).relative_l2;
   return std::make_unique<FactoredMaterial>(std::move(st));
@@ -687,7 +767,8 @@ std::unique_ptr<FactoredMaterial> compress_factored(const std::string& backend, 
   const auto t0 = std::chrono::steady_clock::now();
   Progress bar(fmt::format("{}: factoring {} ABRDFs", backend, btf.texel_count()),
                btf.texel_count());
-  const AbrdfFactors factors = factor_texels(btf, half_side * half_side, factor, backend, bar);
+  const AbrdfFactors factors =
+      factor_texels(btf, half_side * half_side, factor, backend, bar, coding.terms);
   bar.finish();
   FactorCodingTimes times;
   times.factorization_seconds = setup_seconds + seconds_since(t0);

@@ -3,6 +3,9 @@
 // colour channel, normalised, clustered and quantised as Suykens et al. 2003 store a factored
 // BTF (sections 5 and 6): any factorisation that produces P, Q and R (the material backends
 // `cmf` and `hf`) encodes through here and shades through kernels/factored_material.cl.
+// A texel may hold K terms sharing its Q (the paper's multiple-term approximation, eq. 3, of the
+// step after the halfway factor): f ~ Q(h) sum_k s_tk P_tk(d) R_tk(e), every term normalised
+// and given its scale as a single term is; the P of all terms share one codebook, as do the R.
 //
 //   P  on the light grid (S x S cells: the light is always a bin centre), M values per channel
 //   Q  on a half_side x half_side HemisphereGrid of halfway directions, read with the
@@ -19,8 +22,8 @@
 // the geometric mean as that Q goes to 0.
 //
 // Encoding (encode_factored_material):
-//   1. normalisation: each factor of each texel and channel divided by its maximum, so it lies
-//      in [0, 1]; the three maxima multiply into the texel's RGB scale (the scale map);
+//   1. normalisation: each factor of each texel, term and channel divided by its maximum, so it
+//      lies in [0, 1]; the three maxima multiply into the term's RGB scale (the scale map);
 //   2. clustering: per factor set (all P, all Q, all R) k-means (k-means++ seeds) on the
 //      normalised RGB vectors gives a codebook and an index map; clusters = 0 keeps one factor
 //      per texel (the paper's "factored" size);
@@ -28,9 +31,11 @@
 //      (numeric/quantization.h, non-negative range; codes here and in the scale map linear in
 //      x^(1 / code_gamma): 1 is the paper's linear textures, 2.2 by default), the scale map in 8
 //      bits per channel with one global RGB scale (the paper's five 8-bit textures);
-//   4. (refit_scale, not in the paper) each texel's scale refitted by least squares to its
+//   4. (refit_scale, not in the paper) each texel's scales refitted by least squares to its
 //      ABRDF with the codebook entries it was given, before the scale map is quantised:
-//      clustering moves a texel's factors to a centroid whose maximum is no longer 1.
+//      clustering moves a texel's factors to a centroid whose maximum is no longer 1 (K terms:
+//      the non-negative least-squares scales, by coordinate descent on the K x K normal
+//      equations; one term: its closed form).
 // What the material evaluates is the decoded state, so save and load reproduce it bit for bit.
 #include <cstdint>
 #include <functional>
@@ -47,13 +52,17 @@ namespace prt {
 
 class ArchiveReader;
 
-/// Per-texel factors before normalisation, packed RGB: p[(texel * M + j) * 3 + c],
-/// q[(texel * H + a) * 3 + c], r[(texel * V + v) * 3 + c]; all >= 0 and finite.
+/// The most terms a factored texel may hold (the shading kernel's private arrays).
+inline constexpr int kMaxFactorTerms = 4;
+
+/// Per-texel factors before normalisation, packed RGB, K = terms:
+/// p[((texel * K + k) * M + j) * 3 + c], q[(texel * H + a) * 3 + c],
+/// r[((texel * K + k) * V + v) * 3 + c]; all >= 0 and finite.
 struct AbrdfFactors {
-  int texels = 0, light_count = 0, half_count = 0, view_count = 0;
+  int texels = 0, light_count = 0, half_count = 0, view_count = 0, terms = 1;
   std::vector<float> p, q, r;
   AbrdfFactors() = default;
-  AbrdfFactors(int texel_count, int m, int h, int v);
+  AbrdfFactors(int texel_count, int m, int h, int v, int term_count = 1);
 };
 
 /// How Q is read between its halfway-grid samples (the file comment).
@@ -72,6 +81,8 @@ struct FactorCoding {
   int kmeans_iterations = 50;
   /// Set by the backend to the interpolation its fit assumes, not a user parameter.
   HalfwayInterpolation interpolation = HalfwayInterpolation::kLinear;
+  /// Set by the backend: the P R terms its factoriser gives per texel (1 .. kMaxFactorTerms).
+  int terms = 1;
 };
 
 /// The parameters every factored material backend takes (half_side, clusters, quantize,
@@ -90,18 +101,21 @@ struct FactorCodingTimes {
 
 class FactoredMaterial final : public CompressedMaterial {
  public:
-  /// The decoded state. Codebooks are K x (values) x 3 floats; indices per texel (p, q, r).
+  /// The decoded state. Codebooks are (entries) x (values) x 3 floats. Q's index has one entry
+  /// per texel; P's and R's indices and the scale one per texel and term, at texel * terms + k
+  /// (the scale RGB, at (texel * terms + k) * 3).
   struct State {
     std::string backend;
     MaterialSampling sampling;
     int half_side = 0;
+    int terms = 1;
     int clusters_p = 0, clusters_q = 0, clusters_r = 0;
     bool quantized = false;
     double code_gamma = 1.0;  ///< of the codebook codes (quantized only)
     HalfwayInterpolation interpolation = HalfwayInterpolation::kLinear;
     std::vector<float> codebook_p, codebook_q, codebook_r;
     std::vector<std::uint32_t> index_p, index_q, index_r;
-    std::vector<float> scale;  ///< texels x 3
+    std::vector<float> scale;  ///< texels x terms x 3
     /// The encoded bytes when quantized (what save writes; decoded into the floats above).
     std::vector<std::uint8_t> codes_p, codes_q, codes_r, scale_codes;
     std::vector<float> entry_scale_p, entry_scale_q, entry_scale_r;  ///< per codebook entry
@@ -134,22 +148,27 @@ class FactoredMaterial final : public CompressedMaterial {
   int half_count() const { return state_.half_side * state_.half_side; }
   /// Bytes of the unclustered float factors (the paper's "factored data size").
   std::uint64_t factored_bytes() const;
+  /// The terms s_k P_k Q R_k of one sample, k < terms (out holds at least terms values); their
+  /// sum is reflectance().
+  void term_values(int texel, int view, int light, std::span<Rgb> out) const;
 
   /// Reads what save() wrote; InputError naming the file on anything inconsistent.
   static std::unique_ptr<FactoredMaterial> load(const ArchiveReader& archive,
                                                 const std::string& backend);
 
  private:
-  const float* p_entry(int texel) const;
+  const float* p_entry(int texel, int term) const;
   const float* q_entry(int texel) const;
-  const float* r_entry(int texel) const;
+  const float* r_entry(int texel, int term) const;
+  const float* scale_of(int texel, int term) const;
   State state_;
   std::vector<Vec3> lights_;  ///< light directions in float
   std::vector<Vec3> views_;   ///< view directions in float, clamped as shading clamps them
 };
 
 /// Factors one ABRDF channel: f holds the M V samples of one texel and channel (s = view * M +
-/// light), p (M), q (half_count) and r (V) receive its factors. Called concurrently.
+/// light), p (terms x M, term k at k M), q (half_count) and r (terms x V) receive its factors.
+/// Called concurrently.
 using ChannelFactorizer = std::function<void(std::span<const double> f, std::span<double> p,
                                              std::span<double> q, std::span<double> r)>;
 
@@ -160,11 +179,11 @@ ChannelFactorizer channel_factorizer(std::shared_ptr<const Factorizer> f) {
              std::span<double> r) { f->factor(v, p, q, r); };
 }
 
-/// Every texel and channel of `btf` through `factor`, in parallel over texels; `progress`
-/// advances by one per texel. Throws ParameterError naming `backend` when a factor is negative or
-/// not finite.
+/// Every texel and channel of `btf` through `factor` (giving `terms` P R terms), in parallel over
+/// texels; `progress` advances by one per texel. Throws ParameterError naming `backend` when a
+/// factor is negative or not finite.
 AbrdfFactors factor_texels(const Btf& btf, int half_count, const ChannelFactorizer& factor,
-                           const std::string& backend, Progress& progress);
+                           const std::string& backend, Progress& progress, int terms = 1);
 
 /// A material backend's compress(): factor_texels with a progress bar, then
 /// encode_factored_material; the material's timings hold factorization_seconds (the whole
