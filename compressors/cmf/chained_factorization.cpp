@@ -21,11 +21,37 @@ constexpr int kMaskedRankOneIterations = 30;
 constexpr double kRefineAnchor = 1e-10;
 // Alternating sweeps of step 3's K-term split (terms > 1).
 constexpr int kTermSweeps = 50;
+// Coordinate-descent sweeps of the non-negative Q step, and the relative change that ends them.
+constexpr int kQSweeps = 200;
+constexpr double kQTolerance = 1e-12;
 
 double norm(std::span<const double> x) {
   double s = 0;
   for (double v : x) s += v * v;
   return std::sqrt(s);
+}
+
+// Coordinate descent on min x^T A x - 2 b^T x subject to x >= 0 (A symmetric positive
+// definite), from a feasible x; each step is the exact minimiser along its coordinate, so the
+// objective never increases.
+void nonnegative_descent(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
+                         Eigen::VectorXd& x) {
+  Eigen::VectorXd ax = a * x;
+  const Eigen::VectorXd diag = a.diagonal();
+  for (int sweep = 0; sweep < kQSweeps; ++sweep) {
+    double change = 0, size = 0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      if (!(diag[i] > 0)) continue;
+      const double next = std::max(x[i] - (ax[i] - b[i]) / diag[i], 0.0), delta = next - x[i];
+      if (delta == 0) continue;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, i); it; ++it)
+        ax[it.row()] += delta * it.value();
+      x[i] = next;
+      change = std::max(change, std::abs(delta));
+      size = std::max(size, next);
+    }
+    if (change <= kQTolerance * size) break;
+  }
 }
 
 }  // namespace
@@ -152,9 +178,9 @@ ChainedFactorization::ChainedFactorization(const ChainOptions& options) : o_(opt
 void ChainedFactorization::factor(std::span<const double> f, std::span<double> p,
                                   std::span<double> q, std::span<double> r) const {
   const int m = light_count(), v = view_count(), h = half_count();
-  const auto k = static_cast<std::size_t>(o_.terms);
-  PRT_CHECK(f.size() == static_cast<std::size_t>(m) * v && p.size() == k * m &&
-                q.size() == static_cast<std::size_t>(h) && r.size() == k * v,
+  const auto terms = static_cast<std::size_t>(o_.terms);
+  PRT_CHECK(f.size() == static_cast<std::size_t>(m) * v && p.size() == terms * m &&
+                q.size() == static_cast<std::size_t>(h) && r.size() == terms * v,
             "cmf: factor sizes");
   const Eigen::Map<const Eigen::VectorXd> fv(f.data(), static_cast<Eigen::Index>(f.size()));
   const double f_mean = fv.mean();
@@ -165,8 +191,17 @@ void ChainedFactorization::factor(std::span<const double> f, std::span<double> p
   } else {
     halfway_from_gshd(fv, q);
   }
-  divide_and_split(f, p, q, r);
-  if (o_.refine > 0) refine(f, p, q, r);
+  // Without step 4 the further terms of step 3 join in step 3's domain (the samples divided by
+  // Q); with it, each joins the refined chain of the terms before it, in the original samples.
+  divide_and_split(f, p, q, r, o_.refine == 0 ? o_.terms : 1);
+  if (o_.refine == 0) return;
+  refine(f, p, q, r, 1);
+  for (int k = 1; k < o_.terms; ++k) {
+    const Eigen::VectorXd q_io = w_ * Eigen::Map<const Eigen::VectorXd>(q.data(), h);
+    add_term(f, std::span<const double>(q_io.data(), static_cast<std::size_t>(q_io.size())), k, p,
+             r);
+    refine(f, p, q, r, k + 1);
+  }
 }
 
 void ChainedFactorization::halfway_from_gshd(const Eigen::Ref<const Eigen::VectorXd>& fv,
@@ -226,7 +261,8 @@ void ChainedFactorization::halfway_from_gshd(const Eigen::Ref<const Eigen::Vecto
 }
 
 void ChainedFactorization::divide_and_split(std::span<const double> f, std::span<double> p,
-                                            std::span<double> q, std::span<double> r) const {
+                                            std::span<double> q, std::span<double> r,
+                                            int terms) const {
   const int m = light_count(), v = view_count(), h = half_count();
   // Step 3: divide Q out in the original samples, rank-1 of the residue.
   const Eigen::Map<const Eigen::VectorXd> qv(q.data(), h);
@@ -239,25 +275,37 @@ void ChainedFactorization::divide_and_split(std::span<const double> f, std::span
                      : 0.0;
   rank_one(residue, m, v, p.first(static_cast<std::size_t>(m)),
            r.first(static_cast<std::size_t>(v)));
-  if (o_.terms == 1) return;
-  // Each further term starts as the rank-1 fit of what the terms before it leave, clamped at 0.
-  std::vector<double> rest(residue.size());
-  for (int k = 1; k < o_.terms; ++k) {
-    for (std::size_t s = 0; s < rest.size(); ++s) {
-      const std::size_t j = s % static_cast<std::size_t>(m), e = s / static_cast<std::size_t>(m);
-      double model = 0;
-      for (int l = 0; l < k; ++l)
-        model += p[static_cast<std::size_t>(l) * m + j] * r[static_cast<std::size_t>(l) * v + e];
-      rest[s] = std::max(residue[s] - model, 0.0);
-    }
-    rank_one(rest, m, v, p.subspan(static_cast<std::size_t>(k) * m, static_cast<std::size_t>(m)),
-             r.subspan(static_cast<std::size_t>(k) * v, static_cast<std::size_t>(v)));
+  for (int k = 1; k < terms; ++k) add_term(residue, {}, k, p, r);
+}
+
+void ChainedFactorization::add_term(std::span<const double> target, std::span<const double> w,
+                                    int k, std::span<double> p, std::span<double> r) const {
+  const int m = light_count(), v = view_count();
+  const auto km = static_cast<std::size_t>(k) * m, kv = static_cast<std::size_t>(k) * v;
+  double w_peak = 0;
+  for (double x : w) w_peak = std::max(w_peak, x);
+  // R_k's start: the rank-1 fit of the positive part of what terms 0 .. k-1 leave, in the units
+  // of the factors (divided by the weight).
+  std::vector<double> rest(target.size());
+  for (std::size_t s = 0; s < rest.size(); ++s) {
+    const std::size_t j = s % static_cast<std::size_t>(m), e = s / static_cast<std::size_t>(m);
+    double model = 0;
+    for (int l = 0; l < k; ++l)
+      model += p[static_cast<std::size_t>(l) * m + j] * r[static_cast<std::size_t>(l) * v + e];
+    const double ws = w.empty() ? 1.0 : w[s];
+    rest[s] = ws > 1e-12 * w_peak ? std::max(target[s] / ws - model, 0.0) : 0.0;
   }
-  fit_terms(residue, {}, o_.terms, p, r, kTermSweeps);
+  rank_one(rest, m, v, p.subspan(km, static_cast<std::size_t>(m)),
+           r.subspan(kv, static_cast<std::size_t>(v)));
+  // P_k from 0, so that the first sweep's P_k is the exact minimiser given R_k and the fit of
+  // k + 1 terms starts no worse than that of k terms.
+  std::fill(p.begin() + static_cast<std::ptrdiff_t>(km),
+            p.begin() + static_cast<std::ptrdiff_t>(km + m), 0.0);
+  fit_terms(target, w, k + 1, p.first(km + m), r.first(kv + v), kTermSweeps);
 }
 
 void ChainedFactorization::refine(std::span<const double> f, std::span<double> p,
-                                  std::span<double> q, std::span<double> r) const {
+                                  std::span<double> q, std::span<double> r, int terms) const {
   const int m = light_count(), v = view_count(), h = half_count();
   Eigen::SparseMatrix<double> normal = normal_pattern_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
@@ -270,7 +318,7 @@ void ChainedFactorization::refine(std::span<const double> f, std::span<double> p
     rhs.setZero();
     for (int s = 0; s < w_.rows(); ++s) {
       double a = p[s % m] * r[s / m];
-      for (int k = 1; k < o_.terms; ++k)
+      for (int k = 1; k < terms; ++k)
         a +=
             p[static_cast<std::size_t>(k) * m + s % m] * r[static_cast<std::size_t>(k) * v + s / m];
       const double a2 = a * a;
@@ -293,11 +341,27 @@ void ChainedFactorization::refine(std::span<const double> f, std::span<double> p
     }
     solver.factorize(normal);
     if (solver.info() != Eigen::Success) return;
-    qv = solver.solve(rhs).cwiseMax(0.0);
+    const Eigen::VectorXd solved = solver.solve(rhs);
+    if (solved.minCoeff() >= 0.0) {
+      qv = solved;  // the exact minimiser
+    } else {
+      // Clamping the unconstrained solution can fit worse than Q did (a product of several
+      // terms leaves cells barely seen, where Q swings): coordinate descent on the non-negative
+      // problem from the better of the two.
+      const Eigen::SparseMatrix<double> full = normal.selfadjointView<Eigen::Lower>();
+      const auto objective = [&](const Eigen::VectorXd& x) {
+        return x.dot(full * x) - 2.0 * rhs.dot(x);
+      };
+      Eigen::VectorXd x = solved.cwiseMax(0.0);
+      if (objective(x) > objective(qv)) x = qv;
+      nonnegative_descent(full, rhs, x);
+      qv = x;
+    }
     const Eigen::VectorXd q_io = w_ * qv;
     // Each P_k given Q and the R, then each R_k given Q and the P.
-    fit_terms(f, std::span<const double>(q_io.data(), static_cast<std::size_t>(q_io.size())),
-              o_.terms, p, r, 1);
+    fit_terms(f, std::span<const double>(q_io.data(), static_cast<std::size_t>(q_io.size())), terms,
+              p.first(static_cast<std::size_t>(terms) * m),
+              r.first(static_cast<std::size_t>(terms) * v), 1);
   }
 }
 

@@ -17,10 +17,12 @@
 //      paper's multiple-term approximation of a step, eq. 3) the residue is split into K
 //      non-negative terms sum_k P_k R_k^T instead of the K leading singular pairs, whose
 //      factors past the first change sign and could not be stored as the non-negative 8-bit
-//      textures (the paper names non-negative factorisation as the alternative): term 1 the
-//      rank-1 SVD, term k the rank-1 SVD of the positive part of what terms 1 .. k-1 leave, then
-//      sweeps of hierarchical alternating least squares (each P_k, then each R_k, the exact
-//      non-negative minimiser with the others fixed);
+//      textures (the paper names non-negative factorisation as the alternative). Term k joins
+//      the fit of terms 1 .. k-1 as the rank-1 SVD of the positive part of what they leave,
+//      followed by sweeps of hierarchical alternating least squares (each P_k, then each R_k,
+//      the exact non-negative minimiser with the others fixed), starting from P_k = 0 so that K
+//      terms never fit worse than K - 1 (with `refine` > 0, in the original samples after step
+//      4 has refined the K - 1 terms, and step 4 runs again on the K);
 //   4. optionally (`refine` > 0, not in the paper) alternate least squares on the final model
 //      in the original samples: Q by a sparse normal-equation solve (pulled weakly towards its
 //      previous value and clamped at 0), then each P_k and R_k in closed form (each the exact
@@ -61,10 +63,15 @@ class ChainedFactorization {
 
  private:
   void halfway_from_gshd(const Eigen::Ref<const Eigen::VectorXd>& f, std::span<double> q) const;
+  // Steps 3's first `terms` terms.
   void divide_and_split(std::span<const double> f, std::span<double> p, std::span<double> q,
-                        std::span<double> r) const;
+                        std::span<double> r, int terms) const;
+  // Term k (0-based) of the fit of target ~ w sum P R (w empty: all 1) beside terms 0 .. k-1.
+  void add_term(std::span<const double> target, std::span<const double> w, int k,
+                std::span<double> p, std::span<double> r) const;
+  // `refine` alternations on the first `terms` terms.
   void refine(std::span<const double> f, std::span<double> p, std::span<double> q,
-              std::span<double> r) const;
+              std::span<double> r, int terms) const;
   ChainOptions o_;
   GshdResampling gshd_;
   Eigen::SparseMatrix<double, Eigen::RowMajor> w_;   // halfway weights, (M V) x H

@@ -1,27 +1,37 @@
 // Material cmf (chained matrix factorisation, Suykens et al. 2003): the chain recovers an exact
 // product of three factors (its last step exactly for a rank-1 residue, the whole product by
-// the alternating refinement the paper does not have); clustering with as many clusters as texels
-// is lossless before quantisation; 8-bit storage stays within the bound its steps imply; every
-// ABRDF of a texel-varying product BTF comes back through the material; step 1's resampling
-// reads the incident direction on the light grid and the exitant one on the view grid (an ABRDF
-// of the light alone gives the halfway means of the light function at the GSHD incident
-// directions; a light/view swap is invisible to Q by the mirror symmetry of the GSHD difference
-// grid). The material conformance
-// suite covers the OpenCL evaluation against the C++ one, save/load and the declared error.
+// the alternating refinement the paper does not have) and, with two terms, a sum of two
+// products that one term cannot fit; the fit never gets worse with more terms or more
+// refinement; clustering with as many clusters as texels is lossless before quantisation;
+// 8-bit storage stays within the bound its steps imply; every ABRDF of a texel-varying product
+// BTF comes back through the material; terms evaluate on the device as in C++ and survive
+// save/load (an older state reads as one term); step 1's resampling reads the incident
+// direction on the light grid and the exitant one on the view grid (an ABRDF of the light alone
+// gives the halfway means of the light function at the GSHD incident directions; a light/view
+// swap is invisible to Q by the mirror symmetry of the GSHD difference grid). The material
+// conformance suite covers the OpenCL evaluation against the C++ one, save/load and the
+// declared error.
 #include "cmf/cmf.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "prtlab/btf/btf_generator.h"
 #include "prtlab/btf/btf_materials.h"
 #include "prtlab/btf/halfway_parameterization.h"
 #include "prtlab/compress/material_error.h"
+#include "prtlab/compress/material_registry.h"
+#include "prtlab/opencl/cl_context.h"
+#include "prtlab/render/device_material_eval.h"
 #include "prtlab/render/factored_material.h"
 #include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/storage/archive.h"
+#include "support/temp_dir.h"
 
 namespace prt::cmf {
 namespace {
@@ -129,6 +139,224 @@ Btf small_btf(const char* material) {
 std::shared_ptr<const CompressedMaterial> compress(const Btf& btf,
                                                    std::map<std::string, std::string> params) {
   return compress_material("cmf", params, std::make_shared<const Btf>(btf));
+}
+
+// f_s = (W q)_s sum_k P_k[j] R_k[e] with `terms` random positive term pairs.
+Product random_terms_product(int light_side, int view_side, int half_side, int terms,
+                             unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int m = light_side * light_side, v = view_side * view_side, h = half_side * half_side;
+  Product x;
+  // Each term peaks in its own region of the light and view grids, so no rank-1 product
+  // explains their sum.
+  for (int k = 0; k < terms; ++k)
+    for (int j = 0; j < m; ++j) x.p.push_back(0.05 + u(rng) * (j % terms == k ? 1.0 : 0.1));
+  for (int a = 0; a < h; ++a) x.q.push_back(0.2 + 0.8 * u(rng));
+  for (int k = 0; k < terms; ++k)
+    for (int e = 0; e < v; ++e) x.r.push_back(0.05 + u(rng) * (e % terms == k ? 1.0 : 0.1));
+  const auto w = halfway_weights(light_side, view_side, half_side);
+  const Eigen::VectorXd q_io = w * Eigen::Map<const Eigen::VectorXd>(x.q.data(), h);
+  for (int s = 0; s < m * v; ++s) {
+    double a = 0;
+    for (int k = 0; k < terms; ++k)
+      a += x.p[static_cast<std::size_t>(k * m + s % m)] *
+           x.r[static_cast<std::size_t>(k * v + s / m)];
+    x.f.push_back(q_io[s] * a);
+  }
+  return x;
+}
+
+// The chain's fit of one ABRDF: its relative L2 error in the original samples.
+double fit_error(const ChainedFactorization& c, std::span<const double> f) {
+  const int m = c.light_count(), v = c.view_count(), h = c.half_count(), k = c.options().terms;
+  std::vector<double> p(static_cast<std::size_t>(k * m)), q(static_cast<std::size_t>(h)),
+      r(static_cast<std::size_t>(k * v));
+  c.factor(f, p, q, r);
+  const auto w =
+      halfway_weights(c.options().light_side, c.options().view_side, c.options().half_side);
+  const Eigen::VectorXd q_io = w * Eigen::Map<const Eigen::VectorXd>(q.data(), h);
+  double err = 0, norm = 0;
+  for (int s = 0; s < m * v; ++s) {
+    double a = 0;
+    for (int l = 0; l < k; ++l)
+      a += p[static_cast<std::size_t>(l * m + s % m)] * r[static_cast<std::size_t>(l * v + s / m)];
+    err += (q_io[s] * a - f[static_cast<std::size_t>(s)]) *
+           (q_io[s] * a - f[static_cast<std::size_t>(s)]);
+    norm += f[static_cast<std::size_t>(s)] * f[static_cast<std::size_t>(s)];
+  }
+  return std::sqrt(err / norm);
+}
+
+TEST(Cmf, TwoTermsRecoverASumOfTwoProductsThatOneTermCannot) {
+  const Product x = random_terms_product(5, 4, 6, 2, 11);
+  const auto chain = [](int terms, int refine) {
+    ChainOptions o = options(refine);
+    o.terms = terms;
+    return ChainedFactorization(o);
+  };
+  const double one = fit_error(chain(1, 1000), x.f), two = fit_error(chain(2, 1000), x.f);
+  EXPECT_GT(one, 5e-2) << "a sum of two distinct products is not rank 1";
+  EXPECT_LT(two, 1e-4);
+}
+
+// Every ABRDF channel of a BTF as M V doubles (s = view * M + light).
+std::vector<std::vector<double>> abrdfs(const Btf& btf) {
+  std::vector<std::vector<double>> out;
+  const std::size_t n = static_cast<std::size_t>(btf.light_count()) * btf.view_count();
+  for (int t = 0; t < btf.texel_count(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const float* base = btf.data().data() + btf.offset(t, 0, 0);
+      std::vector<double> f(n);
+      for (std::size_t s = 0; s < n; ++s) f[s] = base[s * 3 + c];
+      out.push_back(std::move(f));
+    }
+  return out;
+}
+
+TEST(Cmf, MoreTermsAndMoreRefinementNeverFitWorse) {
+  // Term k joins from P_k = 0 and every later step is an exact non-negative minimiser of its
+  // block (Q's too, by coordinate descent where the unconstrained solve goes negative), so the
+  // fit of each ABRDF is monotone in the terms and, for one chain, in the refinement sweeps.
+  const Btf btf = small_btf("rings");
+  ChainOptions o;
+  o.light_side = btf.light_side();
+  o.view_side = btf.view_side();
+  o.half_side = o.diff_side = 6;
+  for (const auto& f : abrdfs(btf)) {
+    for (int refine : {0, 3}) {
+      double previous = 2;
+      for (int k = 1; k <= kMaxFactorTerms; ++k) {
+        o.terms = k;
+        o.refine = refine;
+        const double e = fit_error(ChainedFactorization(o), f);
+        ASSERT_LE(e, previous * (1 + 1e-9) + 1e-12) << k << " terms, refine " << refine;
+        previous = e;
+      }
+    }
+    o.terms = 1;
+    double previous = 2;
+    for (int refine = 0; refine <= 4; ++refine) {
+      o.refine = refine;
+      const double e = fit_error(ChainedFactorization(o), f);
+      ASSERT_LE(e, previous * (1 + 1e-9) + 1e-12) << "refine " << refine;
+      previous = e;
+    }
+  }
+}
+
+TEST(Cmf, MoreTermsNeverLoseThroughTheMaterial) {
+  // Float factors, one per texel: the material holds the chain's fit and the scale refit (a
+  // non-negative least-squares problem started from the fit's scales) can only lower it.
+  for (const char* material : {"rings", "checker"}) {
+    const Btf btf = small_btf(material);
+    double previous = 2;
+    for (const char* terms : {"1", "2", "3"}) {
+      const double e = material_error(*compress(btf, {{"half_side", "6"},
+                                                      {"quantize", "false"},
+                                                      {"clusters", "0"},
+                                                      {"refine", "3"},
+                                                      {"terms", terms}}),
+                                      btf)
+                           .relative_l2;
+      EXPECT_LE(e, previous * (1 + 1e-5)) << material << ", " << terms << " terms";
+      previous = e;
+    }
+    EXPECT_LT(previous, 0.5 * material_error(*compress(btf, {{"half_side", "6"},
+                                                             {"quantize", "false"},
+                                                             {"clusters", "0"},
+                                                             {"refine", "3"}}),
+                                             btf)
+                                  .relative_l2)
+        << material << ": three terms should clearly beat one";
+  }
+}
+
+TEST(Cmf, TermsOnTheDeviceMatchTheCppReference) {
+  ClContext* ctx = default_context();
+  if (ctx == nullptr)
+    GTEST_SKIP() << "no OpenCL device on this machine: the device path is not tested here";
+  const auto btf = std::make_shared<const Btf>(small_btf("weave"));
+  // Parts of 1, 2 and 3 terms in one upload: each row of the part table carries its terms.
+  std::vector<std::shared_ptr<const CompressedMaterial>> held;
+  for (const char* terms : {"1", "2", "3"})
+    held.push_back(compress_material(
+        "cmf", {{"half_side", "6"}, {"clusters", "8"}, {"refine", "2"}, {"terms", terms}}, btf));
+  const std::vector<const CompressedMaterial*> parts = {held[0].get(), held[1].get(),
+                                                        held[2].get()};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> uv(-0.5f, 1.5f), xy(-1.0f, 1.0f);
+  std::vector<MaterialQuery> qs;
+  for (int i = 0; i < 60; ++i) {
+    Vec3 e(xy(rng), xy(rng), std::abs(xy(rng)) + 0.05f);
+    qs.push_back({i % 3, Vec2(uv(rng), uv(rng)), glm::normalize(e)});
+  }
+  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
+    const auto gpu = evaluate_materials_on_device(*ctx, parts, qs, filter);
+    const int m = btf->light_count();
+    ASSERT_EQ(gpu.size(), qs.size() * static_cast<std::size_t>(m));
+    std::vector<Rgb> cpp(static_cast<std::size_t>(m));
+    for (std::size_t i = 0; i < qs.size(); ++i) {
+      parts[static_cast<std::size_t>(qs[i].part)]->eval_lights(qs[i].uv, qs[i].view_local, cpp,
+                                                               filter);
+      float peak = 0;
+      for (const Rgb& x : cpp) peak = std::max({peak, x.x, x.y, x.z});
+      for (int j = 0; j < m; ++j)
+        for (int c = 0; c < 3; ++c)
+          // A few float products and sums per value, in the same order: rounding only.
+          ASSERT_NEAR(gpu[i * m + j][c], cpp[static_cast<std::size_t>(j)][c], 1e-6f * peak)
+              << "query " << i << " part " << qs[i].part << " light " << j;
+    }
+  }
+}
+
+TEST(Cmf, TermsSurviveSaveAndLoadAndAnOlderStateHasOne) {
+  const auto btf = std::make_shared<const Btf>(small_btf("checker"));
+  const auto m = compress_material(
+      "cmf", {{"half_side", "4"}, {"clusters", "5"}, {"refine", "1"}, {"terms", "2"}}, btf);
+  const testing::TempDir dir("cmf");
+  save_material(*m, dir / "two.prtm");
+  const auto loaded = load_material(dir / "two.prtm");
+  EXPECT_EQ(dynamic_cast<const FactoredMaterial&>(*loaded).state().terms, 2);
+  const auto same = [&](const CompressedMaterial& a, const CompressedMaterial& b) {
+    for (int t = 0; t < btf->texel_count(); ++t)
+      for (int v = 0; v < btf->view_count(); ++v)
+        for (int j = 0; j < btf->light_count(); ++j) {
+          const Rgb x = a.reflectance(t, v, j), y = b.reflectance(t, v, j);
+          if (std::memcmp(&x, &y, sizeof(Rgb)) != 0) return false;
+        }
+    return true;
+  };
+  EXPECT_TRUE(same(*m, *loaded));
+  const auto write = [&](const CompressedMaterial& from, const std::filesystem::path& file,
+                         const auto& edit) {
+    ArchiveWriter w("compressed-material", 1);
+    w.add_meta("backend", from.backend());
+    from.save(w);
+    edit(w.meta().at("factored"));
+    w.write(file);
+  };
+  // A version 2 state (before terms were stored) has one term and reads as it did.
+  const auto one = compress_material("cmf", {{"half_side", "4"}, {"clusters", "5"}}, btf);
+  write(*one, dir / "v2.prtm", [](nlohmann::json& j) {
+    j["format_version"] = 2;
+    j.erase("terms");
+  });
+  const auto old = load_material(dir / "v2.prtm");
+  EXPECT_EQ(dynamic_cast<const FactoredMaterial&>(*old).state().terms, 1);
+  EXPECT_TRUE(same(*one, *old));
+  // Terms out of range, or more than the sections hold, are refused with the file named.
+  for (const int bad : {0, kMaxFactorTerms + 1, 3}) {
+    const auto file = dir / fmt::format("terms{}.prtm", bad);
+    write(*m, file, [&](nlohmann::json& j) { j["terms"] = bad; });
+    try {
+      (void)load_material(file);
+      ADD_FAILURE() << bad << " terms were accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(file.filename().string()), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(Cmf, EveryTexelOfAProductBtfComesBackThroughTheMaterial) {
