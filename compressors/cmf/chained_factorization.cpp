@@ -22,8 +22,8 @@ constexpr double kRefineAnchor = 1e-10;
 // Alternating sweeps of step 3's K-term split (terms > 1).
 constexpr int kTermSweeps = 50;
 // Coordinate-descent sweeps of the non-negative Q step, and the relative change that ends them.
-constexpr int kQSweeps = 200;
-constexpr double kQTolerance = 1e-12;
+constexpr int kQSweeps = 30;
+constexpr double kQTolerance = 1e-6;
 
 double norm(std::span<const double> x) {
   double s = 0;
@@ -346,15 +346,18 @@ void ChainedFactorization::refine(std::span<const double> f, std::span<double> p
       qv = solved;  // the exact minimiser
     } else {
       // Clamping the unconstrained solution can fit worse than Q did (a product of several
-      // terms leaves cells barely seen, where Q swings): coordinate descent on the non-negative
-      // problem from the better of the two.
-      const Eigen::SparseMatrix<double> full = normal.selfadjointView<Eigen::Lower>();
+      // terms leaves cells barely seen, where Q swings): then coordinate descent on the
+      // non-negative problem from the previous Q instead, which can only improve on it.
       const auto objective = [&](const Eigen::VectorXd& x) {
-        return x.dot(full * x) - 2.0 * rhs.dot(x);
+        const Eigen::VectorXd nx = normal.selfadjointView<Eigen::Lower>() * x;
+        return x.dot(nx) - 2.0 * rhs.dot(x);
       };
       Eigen::VectorXd x = solved.cwiseMax(0.0);
-      if (objective(x) > objective(qv)) x = qv;
-      nonnegative_descent(full, rhs, x);
+      if (objective(x) > objective(qv)) {
+        x = qv;
+        nonnegative_descent(Eigen::SparseMatrix<double>(normal.selfadjointView<Eigen::Lower>()),
+                            rhs, x);
+      }
       qv = x;
     }
     const Eigen::VectorXd q_io = w_ * qv;
