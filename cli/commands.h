@@ -18,6 +18,7 @@ struct GlobalOptions {
   std::string device;          ///< --device (else $PRTLAB_DEVICE, else first GPU, else PoCL)
   bool strict_device = false;  ///< --strict-device: fail instead of falling back
   bool no_opencl = false;      ///< --no-opencl: C++ reference paths only
+  int threads = 0;             ///< --threads: worker threads (0: every core TBB sees)
 };
 GlobalOptions& global_options();
 

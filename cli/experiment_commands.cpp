@@ -18,6 +18,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/distributed/communicator.h"
 #include "stability_suite.h"
 #include "table_report.h"
 
@@ -125,17 +126,18 @@ experiments::RunSummary run_one(const std::filesystem::path& file, const std::st
   ro.max_points = o.max_points;
   ro.show_progress_bars = !g.quiet;
   ro.command_line = command_line_from_provenance();
+  ro.comm = &Communicator::world();
   if (!g.quiet)
     ro.on_progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   auto summary = experiments::run_experiment(spec, ro);
-  experiments::write_experiment_report(summary.folder, o.plot, g.quiet);
+  if (ro.comm->is_root()) experiments::write_experiment_report(summary.folder, o.plot, g.quiet);
   return summary;
 }
 
 // A run with failed points has not measured what its file asks for: the command fails with a
 // one-line summary (printed even with -q) after the result files are written.
 void check_run(const experiments::RunSummary& s) {
-  if (s.failed == 0) return;
+  if (s.failed == 0 || !Communicator::world().is_root()) return;
   throw Error(fmt::format(
       "{}: {} point{} failed, {} measured{} (first: {}; every failure is in {})", s.folder.string(),
       s.failed, s.failed == 1 ? "" : "s", s.points, s.complete ? "" : "; not marked complete",
@@ -143,6 +145,7 @@ void check_run(const experiments::RunSummary& s) {
 }
 
 void print_run(const experiments::RunSummary& s, bool json) {
+  if (!Communicator::world().is_root()) return;  // the root wrote the files
   if (json) {
     auto j = s.result;
     j["folder"] = s.folder.string();
@@ -181,9 +184,20 @@ nlohmann::json run_stability_file(const std::filesystem::path& file, const std::
   return experiments::run_stability_suite(file, so);
 }
 
+// Material tables, the stability suite and the paper's tables run on one process.
+void refuse_on_ranks(const std::filesystem::path& file) {
+  if (Communicator::world().distributed())
+    throw ParameterError(fmt::format(
+        "{}: material tables, the stability suite and the paper's tables run on one process; "
+        "run it without mpirun (experiment files of points spread over ranks)",
+        file.string()));
+}
+
 void run_file(const RunCli& o) {
   const auto file = experiments::resolve_experiment(o.experiment);
   const std::string variant = variant_of(o);
+  if (experiments::is_stability_suite(file) || experiments::is_material_table(file))
+    refuse_on_ranks(file);
   if (experiments::is_stability_suite(file)) {
     const auto r = run_stability_file(file, variant, o);
     if (o.json)
@@ -216,6 +230,10 @@ void run_all(const RunCli& o) {
   const std::string variant = variant_of(o);
   const bool quiet = global_options().quiet;
   auto ctx = open_device_from_options();
+  // On several ranks the files of points are spread over them; what runs on one process (the
+  // paper's tables, material tables, the stability suite) runs on the root while the others go
+  // on to the next file of points.
+  const bool root = Communicator::world().is_root();
   // The paper's tables first (--quick: on the bunny alone, into <out>/tables-quick/ so that the
   // full tables are never replaced by partial ones), then every experiment file.
   for (const char* name : {"table1", "table2"}) {
@@ -226,6 +244,7 @@ void run_all(const RunCli& o) {
     t.plot = o.plot;
     if (o.quick) t.scenes = {"bunny"};
     if (!o.scenes.empty()) t.scenes = o.scenes;
+    if (!root) continue;
     if (!quiet) std::fprintf(stderr, "== experiment %s\n", name);
     run_table(t);
   }
@@ -235,6 +254,7 @@ void run_all(const RunCli& o) {
                           const std::vector<std::string>& variants,
                           const std::function<std::filesystem::path()>& folder_of,
                           const std::function<nlohmann::json()>& run) {
+    if (!root) return;
     if (!variant.empty() &&
         std::find(variants.begin(), variants.end(), variant) == variants.end()) {
       if (!quiet)

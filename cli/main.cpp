@@ -1,5 +1,8 @@
+#include <tbb/global_control.h>
+
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,9 +12,44 @@
 #include "prtlab/base/log.h"
 #include "prtlab/base/progress.h"
 #include "prtlab/compress/compressor_registry.h"
+#include "prtlab/distributed/communicator.h"
 #include "prtlab/storage/atomic_file.h"
 
+namespace {
+
+// The commands that spread their work over MPI ranks (docs/distributed.md); any other command
+// launched on several ranks would run once per rank, each writing the same files.
+bool runs_distributed(const CLI::App& app) {
+  for (const CLI::App* sub : app.get_subcommands()) {
+    if (sub->get_name() == "precompute") return true;
+    if (sub->get_name() == "experiment")
+      for (const CLI::App* what : sub->get_subcommands())
+        if (what->get_name() == "run" || what->get_name() == "all") return true;
+  }
+  return false;
+}
+
+int run(int argc, char** argv);
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  std::optional<prt::DistributedSession> session;
+  try {
+    session.emplace(argc, argv);
+  } catch (const prt::Error& e) {
+    std::fprintf(stderr, "prtlab: error: %s\n", e.what());
+    return 1;
+  }
+  const int code = run(argc, argv);
+  // An error on one rank would leave the others waiting for it in a collective.
+  if (code != 0 && prt::Communicator::world().distributed()) prt::DistributedSession::abort(code);
+  return code;
+}
+
+namespace {
+
+int run(int argc, char** argv) {
   using namespace prt;
   cli::set_command_line(argc, argv);
   remove_temporaries_on_signal();
@@ -28,6 +66,11 @@ int main(int argc, char** argv) {
   app.add_flag("--strict-device", g.strict_device,
                "Fail instead of falling back when the device is not found");
   app.add_flag("--no-opencl", g.no_opencl, "Run the C++ reference paths only");
+  app.add_option("--threads", g.threads,
+                 "Worker threads of this process (default: every core; on several MPI ranks, "
+                 "per rank)")
+      ->check(CLI::Range(1, 4096));
+  std::optional<tbb::global_control> thread_limit;
   std::vector<std::string> plugins;
   app.add_option("--plugin", plugins,
                  "Load compressor backends from a plugin library (repeatable; see "
@@ -44,7 +87,19 @@ int main(int argc, char** argv) {
       set_log_level(LogLevel::kWarn);
     }
     if (g.verbose) set_log_level(LogLevel::kDebug);
+    if (g.threads > 0)
+      thread_limit.emplace(tbb::global_control::max_allowed_parallelism,
+                           static_cast<std::size_t>(g.threads));
     for (const auto& path : plugins) load_plugin(path);
+    const Communicator& world = Communicator::world();
+    if (world.distributed() && !runs_distributed(app))
+      throw ParameterError(fmt::format(
+          "running on {} MPI ranks: only `prtlab precompute` and `prtlab experiment run|all` "
+          "spread over ranks; run this command without mpirun",
+          world.size()));
+    // Only the root prints progress bars and info lines; the others say what they do through
+    // their [rank r/N] progress lines.
+    if (world.distributed() && !world.is_root()) Progress::set_quiet(true);
   });
 
   cli::add_scene_commands(app);
@@ -68,7 +123,10 @@ int main(int argc, char** argv) {
     }
     return app.exit(e);
   } catch (const prt::Error& e) {
-    std::fprintf(stderr, "prtlab: error: %s\n", e.what());
+    if (Communicator::world().distributed())
+      std::fprintf(stderr, "prtlab: error (rank %d): %s\n", Communicator::world().rank(), e.what());
+    else
+      std::fprintf(stderr, "prtlab: error: %s\n", e.what());
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "prtlab: unexpected error: %s\n", e.what());
@@ -76,3 +134,5 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace

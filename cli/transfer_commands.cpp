@@ -14,6 +14,7 @@
 #include "prtlab/compress/backend_input.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/light_options.h"
+#include "prtlab/distributed/communicator.h"
 #include "prtlab/lighting/environment_map.h"
 #include "prtlab/storage/archive.h"
 #include "prtlab/storage/data_paths.h"
@@ -134,13 +135,16 @@ SceneTransfer precompute(const SceneDesc& desc, bool force, int sh_order) {
   opt.sh_order = sh_order;
   opt.cache = force ? CacheMode::kRefresh : CacheMode::kUse;
   opt.show_progress = !global_options().quiet;
+  opt.comm = &Communicator::world();
   return precompute_scene_transfer(desc, opt, cache);
 }
 
 void run_precompute(const PrecomputeCli& o) {
   const SceneDesc desc = parse_scene(resolve_scene(o.scene));
   const SceneTransfer st = precompute(desc, o.force, o.sh_order);
+  if (!st.holds_result) return;  // a rank other than the root: the root reports
   const TransferMatrix& t = st.result.transfer;
+  const std::string checksum = transfer_data_checksum(st.result);
   const TransferStats& s = st.result.stats;
   const double nnz_m = static_cast<double>(t.nnz()) / 1e6;
   const double mflops = 2.0 * static_cast<double>(t.nnz()) / 1e6;
@@ -169,6 +173,18 @@ void run_precompute(const PrecomputeCli& o) {
     j["rays_traced"] = s.rays_traced;
     j["rays_per_second"] = s.rays_per_second();
     j["threads"] = s.threads;
+    j["ranks"] = s.ranks;
+    j["data_checksum"] = checksum;
+    if (!st.shares.empty()) {
+      nlohmann::json shares = nlohmann::json::array();
+      for (const auto& r : st.shares)
+        shares.push_back({{"rank", r.rank},
+                          {"points", r.points},
+                          {"chunks", r.chunks},
+                          {"seconds_tracing", r.seconds_tracing},
+                          {"bytes_sent", r.bytes_sent}});
+      j["rank_shares"] = shares;
+    }
     j["time_breakdown"] = {{"setup", s.seconds_setup},
                            {"points", s.seconds_points},
                            {"assemble", s.seconds_assemble},
@@ -201,6 +217,14 @@ void run_precompute(const PrecomputeCli& o) {
               s.seconds_points, s.seconds_assemble);
   std::printf("rays             %.1f M traced, %.1f M rays/s on %d threads\n", s.rays_traced / 1e6,
               s.rays_per_second() / 1e6, s.threads);
+  if (s.ranks > 1) std::printf("ranks            %d (MPI)\n", s.ranks);
+  for (const auto& r : st.shares)
+    std::printf("  rank %-3d       %llu vertices in %llu chunks, %.2f s, %.1f MB sent\n", r.rank,
+                static_cast<unsigned long long>(r.points),
+                static_cast<unsigned long long>(r.chunks), r.seconds_tracing,
+                static_cast<double>(r.bytes_sent) / 1e6);
+  std::printf("data checksum    %s (T and SH arrays; the archive's own also covers its timings)\n",
+              checksum.c_str());
   std::printf("this run         %.2f s%s\n", st.seconds,
               st.cache_hit ? " (loaded from cache)" : "");
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <optional>
+#include <set>
 
 #include "pareto_front.h"
 #include "point_measurement.h"
@@ -16,6 +17,7 @@
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/light_options.h"
+#include "prtlab/distributed/work_queue.h"
 #include "prtlab/render/image_error.h"
 #include "prtlab/storage/atomic_file.h"
 #include "result_images.h"
@@ -149,6 +151,191 @@ std::vector<std::string> manifest_of(const fs::path& complete) {
   return out;
 }
 
+// The label of a point in progress lines and failures: the backend, then its parameters.
+std::string point_label(const std::string& backend,
+                        const std::map<std::string, std::string>& params) {
+  std::string desc;
+  for (const auto& [k, v] : params) desc += fmt::format(" {}={}", k, v);
+  return backend + desc;
+}
+
+// The storage an equal-storage experiment matches on a scene: a fixed size, or what the
+// target backend stores there.
+std::uint64_t storage_target(const ExperimentSpec& spec, const SceneBench& bench, StageCache& cache,
+                             const BenchOptions& bo, bool show_progress) {
+  if (spec.target.megabytes)
+    return static_cast<std::uint64_t>(std::llround(*spec.target.megabytes * 1e6));
+  const auto& te = CompressorRegistry::instance().get(spec.target.backend);
+  const CompressionResult cr =
+      compress_cached(spec.target.backend, spec.target.params, bench.prepared.input(te),
+                      bench.prepared.transfer.key, cache, bo.cache_mode, show_progress);
+  return cr.compressed->storage().total_bytes();
+}
+
+struct EqualStoragePoint {
+  PointOutcome outcome;
+  json search;
+};
+
+// One backend at the target storage: the search over its size knob (when the experiment leaves
+// it free), then the measurement at the value found.
+EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const SceneBench& bench,
+                                           const std::string& scene, const std::string& backend,
+                                           std::uint64_t target, StageCache& cache,
+                                           const BenchOptions& bo,
+                                           const std::function<void(const std::string&)>& report) {
+  const auto& entry = CompressorRegistry::instance().get(backend);
+  auto params = spec.params.contains(backend) ? spec.params.at(backend)
+                                              : std::map<std::string, std::string>{};
+  json search = {{"scene", scene}, {"backend", backend}, {"target_bytes", target}};
+  if (entry.size_knob && !params.contains(entry.size_knob->key)) {
+    const bool integer = knob_is_int(entry);
+    const auto storage_at = [&](double v) {
+      auto p = params;
+      p[entry.size_knob->key] = format_knob(v, integer);
+      report(fmt::format("{} {}: storage search, {} = {}", scene, backend, entry.size_knob->key,
+                         p[entry.size_knob->key]));
+      const CompressionResult cr = compress_cached(
+          backend, split_point_params(entry, p).compression, bench.prepared.input(entry),
+          bench.prepared.transfer.key, cache, bo.cache_mode, bo.show_progress);
+      return cr.compressed->storage().total_bytes();
+    };
+    const StorageSearch s =
+        search_equal_storage(*entry.size_knob, integer, target, spec.target.tolerance,
+                             spec.target.max_probes, storage_at);
+    params[entry.size_knob->key] = format_knob(s.value, integer);
+    json probes = json::array();
+    for (const auto& p : s.probes) probes.push_back({{"value", p.value}, {"bytes", p.bytes}});
+    search.update({{"knob", entry.size_knob->key},
+                   {"value", params[entry.size_knob->key]},
+                   {"bytes", s.bytes},
+                   {"ratio", s.ratio},
+                   {"reached", s.reached},
+                   {"note", s.note},
+                   {"probes", probes}});
+  } else {
+    search.update({{"knob", entry.size_knob ? json(entry.size_knob->key) : json(nullptr)},
+                   {"reached", nullptr},
+                   {"note", entry.size_knob ? "the experiment fixes the size knob"
+                                            : "no size knob: its storage is what it is"}});
+  }
+  report(fmt::format("{} {}: measuring", scene, backend));
+  PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
+  const double bytes = out.record["storage_bytes"].get<double>();
+  const double ratio = bytes / static_cast<double>(target);
+  out.record["role"] = "equal_storage";
+  out.record["target_bytes"] = target;
+  out.record["storage_ratio"] = ratio;
+  out.record["reached"] = std::abs(ratio - 1.0) <= spec.target.tolerance;
+  if (!search.contains("bytes")) search["bytes"] = out.record["storage_bytes"];
+  search["ratio"] = ratio;
+  search["reached"] = out.record["reached"];
+  return {std::move(out), std::move(search)};
+}
+
+// Failures the ranks of a distributed run met, by scene and point label ("" for the scene).
+using KnownFailures = std::map<std::pair<std::string, std::string>, std::string>;
+
+json gather_failures(Communicator& comm, const json& mine) {
+  const std::string text = mine.dump();
+  const auto all =
+      comm.gather(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+  json merged = json::array();
+  for (const auto& bytes : all)
+    for (auto& f : json::parse(bytes.begin(), bytes.end())) merged.push_back(std::move(f));
+  const std::string out = merged.dump();
+  const auto back = comm.broadcast(std::vector<std::uint8_t>(out.begin(), out.end()));
+  return json::parse(back.begin(), back.end());
+}
+
+// A distributed run's first pass: the scenes' stages, then every point, handed out to the ranks
+// by work queues (a slow point holds up only its rank) and measured into the shared stage
+// cache. The root's single-process pass then finds every point there and writes exactly the
+// files one process writes. Returns every rank's failures, so that the root records them
+// without measuring those points again.
+KnownFailures warm_stage_cache(const ExperimentSpec& spec,
+                               const std::vector<SceneVariant>& variants, StageCache& cache,
+                               const BenchOptions& bo, const RunOptions& o, Communicator& comm) {
+  const auto say = [&](const std::string& line) {
+    if (o.on_progress)
+      o.on_progress(fmt::format("[rank {}/{}] {}", comm.rank(), comm.size(), line));
+  };
+  json failures = json::array();
+  const auto failed = [&](const std::string& scene, const std::string& what,
+                          const std::string& why) {
+    failures.push_back({{"scene", scene}, {"point", what}, {"error", why}});
+    say(fmt::format("warning: {} {} failed: {}", scene, what.empty() ? "(scene)" : what, why));
+  };
+  {
+    WorkQueue scenes(comm, variants.size());
+    while (const auto i = scenes.next()) {
+      const SceneVariant& v = variants[*i];
+      say(fmt::format("{}: exact transfer, materials, exact images", v.name));
+      try {
+        const SceneBench bench = prepare_bench(v, spec, cache, bo);
+        if (spec.kind == ExperimentKind::kEqualStorage)
+          (void)storage_target(spec, bench, cache, bo, bo.show_progress);
+      } catch (const std::exception& e) {
+        failed(v.name, "", e.what());
+      }
+    }
+  }
+  failures = gather_failures(comm, failures);
+  std::set<std::string> bad_scenes;
+  for (const auto& f : failures) bad_scenes.insert(f["scene"].get<std::string>());
+
+  struct Task {
+    std::size_t variant;
+    std::string backend;
+    std::map<std::string, std::string> params;  // sweeps only
+  };
+  std::vector<Task> tasks;
+  for (std::size_t i = 0; i < variants.size(); ++i) {
+    if (bad_scenes.contains(variants[i].name)) continue;
+    for (const auto& backend : spec.backends) {
+      if (spec.kind == ExperimentKind::kEqualStorage)
+        tasks.push_back({i, backend, {}});
+      else
+        for (auto& params : sweep_points(spec, backend)) tasks.push_back({i, backend, params});
+    }
+  }
+  json mine = json::array();
+  failures.swap(mine);  // from here, this rank's own
+  std::optional<SceneBench> bench;
+  std::size_t bench_of = variants.size();
+  {
+    WorkQueue points(comm, tasks.size());
+    while (const auto k = points.next()) {
+      const Task& t = tasks[*k];
+      const SceneVariant& v = variants[t.variant];
+      const std::string what =
+          spec.kind == ExperimentKind::kEqualStorage ? t.backend : point_label(t.backend, t.params);
+      try {
+        if (bench_of != t.variant) {
+          bench.reset();
+          bench.emplace(prepare_bench(v, spec, cache, bo));
+          bench_of = t.variant;
+        }
+        if (spec.kind == ExperimentKind::kEqualStorage) {
+          const std::uint64_t target = storage_target(spec, *bench, cache, bo, bo.show_progress);
+          (void)measure_at_equal_storage(spec, *bench, v.name, t.backend, target, cache, bo, say);
+        } else {
+          say(fmt::format("{} {}", v.name, what));
+          (void)measure_point(*bench, spec, t.backend, t.params, false, cache, bo);
+        }
+      } catch (const std::exception& e) {
+        failed(v.name, what, e.what());
+      }
+    }
+  }
+  for (auto& f : gather_failures(comm, failures)) mine.push_back(std::move(f));
+  KnownFailures known;
+  for (const auto& f : mine)
+    known.emplace(std::pair{f["scene"].get<std::string>(), f["point"].get<std::string>()},
+                  f["error"].get<std::string>());
+  return known;
+}
+
 }  // namespace
 
 fs::path result_folder(const ExperimentSpec& spec, const fs::path& out_root) {
@@ -175,12 +362,22 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   for (const auto& s : spec.scenes)
     for (auto& v : scene_variants(s, spec.scene_grid, cache.root() / "derived-scenes"))
       variants.push_back(std::move(v));
-  if (fs::exists(folder / ".complete")) {
-    if (!o.force)
-      throw ParameterError(fmt::format(
-          "{} holds a complete run; pass --force to overwrite it, or redraw its report with "
-          "prtlab experiment report {}",
-          folder.string(), folder.string()));
+  const bool was_complete = fs::exists(folder / ".complete");
+  if (was_complete && !o.force)
+    throw ParameterError(fmt::format(
+        "{} holds a complete run; pass --force to overwrite it, or redraw its report with "
+        "prtlab experiment report {}",
+        folder.string(), folder.string()));
+  const CacheMode mode = o.recompute ? CacheMode::kRefresh : CacheMode::kUse;
+  BenchOptions bo{o.device, mode, o.show_progress_bars};
+  KnownFailures known;
+  if (o.comm && o.comm->distributed()) {
+    known = warm_stage_cache(spec, variants, cache, bo, o, *o.comm);
+    summary.ranks = o.comm->size();
+    if (!o.comm->is_root()) return summary;  // the root writes the files
+    bo.cache_mode = CacheMode::kUse;         // what the ranks just stored
+  }
+  if (was_complete) {
     // The old files stay until the new run has written its own; then those of the old
     // manifest that the new run did not write again are removed (nothing else in the folder
     // is touched). Without .complete an interrupted forced run resumes like any other.
@@ -193,8 +390,6 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                         "a run of this experiment started here; without "
                         ".complete beside it, it did not finish\n");
 
-  const CacheMode mode = o.recompute ? CacheMode::kRefresh : CacheMode::kUse;
-  BenchOptions bo{o.device, mode, o.show_progress_bars};
   const Provenance prov = collect_provenance(o.command_line, o.device);
   // Other processes change every timing; the report records how busy the machine was.
   std::string load;
@@ -258,6 +453,10 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   for (const auto& variant : variants) {
     report(fmt::format("{}: exact transfer, materials, exact images", variant.name));
     std::optional<SceneBench> prepared;
+    if (const auto f = known.find({variant.name, ""}); f != known.end()) {
+      fail(variant.name, "", f->second);
+      continue;
+    }
     try {
       prepared.emplace(prepare_bench(variant, spec, cache, bo));
     } catch (const RunInterrupted&) {
@@ -269,73 +468,23 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
     SceneBench& bench = *prepared;
     json scene_info = bench.info;
     if (spec.kind == ExperimentKind::kEqualStorage) {
-      std::uint64_t target = 0;
-      if (spec.target.megabytes) {
-        target = static_cast<std::uint64_t>(std::llround(*spec.target.megabytes * 1e6));
-      } else {
-        const auto& te = registry.get(spec.target.backend);
-        report(fmt::format("{}: target storage = {} bytes", variant.name, spec.target.backend));
-        const CompressionResult cr =
-            compress_cached(spec.target.backend, spec.target.params, bench.prepared.input(te),
-                            bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
-        target = cr.compressed->storage().total_bytes();
-      }
+      report(fmt::format("{}: target storage", variant.name));
+      const std::uint64_t target = storage_target(spec, bench, cache, bo, o.show_progress_bars);
       scene_info["target_bytes"] = target;
       scene_info["target_backend"] =
           spec.target.megabytes ? json(nullptr) : json(spec.target.backend);
       std::vector<PointOutcome> outcomes;
       outcomes.reserve(spec.backends.size());
       for (const auto& backend : spec.backends) try {
-          const auto& entry = registry.get(backend);
-          auto params = spec.params.contains(backend) ? spec.params.at(backend)
-                                                      : std::map<std::string, std::string>{};
-          json search = {{"scene", variant.name}, {"backend", backend}, {"target_bytes", target}};
-          if (entry.size_knob && !params.contains(entry.size_knob->key)) {
-            const bool integer = knob_is_int(entry);
-            const auto storage_at = [&](double v) {
-              auto p = params;
-              p[entry.size_knob->key] = format_knob(v, integer);
-              report(fmt::format("{} {}: storage search, {} = {}", variant.name, backend,
-                                 entry.size_knob->key, p[entry.size_knob->key]));
-              const CompressionResult cr = compress_cached(
-                  backend, split_point_params(entry, p).compression, bench.prepared.input(entry),
-                  bench.prepared.transfer.key, cache, mode, o.show_progress_bars);
-              return cr.compressed->storage().total_bytes();
-            };
-            const StorageSearch s =
-                search_equal_storage(*entry.size_knob, integer, target, spec.target.tolerance,
-                                     spec.target.max_probes, storage_at);
-            params[entry.size_knob->key] = format_knob(s.value, integer);
-            json probes = json::array();
-            for (const auto& p : s.probes)
-              probes.push_back({{"value", p.value}, {"bytes", p.bytes}});
-            search.update({{"knob", entry.size_knob->key},
-                           {"value", params[entry.size_knob->key]},
-                           {"bytes", s.bytes},
-                           {"ratio", s.ratio},
-                           {"reached", s.reached},
-                           {"note", s.note},
-                           {"probes", probes}});
-          } else {
-            search.update({{"knob", entry.size_knob ? json(entry.size_knob->key) : json(nullptr)},
-                           {"reached", nullptr},
-                           {"note", entry.size_knob ? "the experiment fixes the size knob"
-                                                    : "no size knob: its storage is what it is"}});
+          if (const auto f = known.find({variant.name, backend}); f != known.end()) {
+            fail(variant.name, backend, f->second);
+            continue;
           }
-          report(fmt::format("{} {}: measuring", variant.name, backend));
-          PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
-          const double bytes = out.record["storage_bytes"].get<double>();
-          const double ratio = bytes / static_cast<double>(target);
-          out.record["role"] = "equal_storage";
-          out.record["target_bytes"] = target;
-          out.record["storage_ratio"] = ratio;
-          out.record["reached"] = std::abs(ratio - 1.0) <= spec.target.tolerance;
-          if (!search.contains("bytes")) search["bytes"] = out.record["storage_bytes"];
-          search["ratio"] = ratio;
-          search["reached"] = out.record["reached"];
-          searches.push_back(search);
-          account(out);
-          outcomes.push_back(std::move(out));
+          EqualStoragePoint e = measure_at_equal_storage(spec, bench, variant.name, backend, target,
+                                                         cache, bo, report);
+          searches.push_back(std::move(e.search));
+          account(e.outcome);
+          outcomes.push_back(std::move(e.outcome));
         } catch (const RunInterrupted&) {
           throw;
         } catch (const std::exception& e) {
@@ -351,10 +500,13 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
     } else {
       for (const auto& backend : spec.backends)
         for (const auto& params : sweep_points(spec, backend)) {
-          std::string desc;
-          for (const auto& [k, v] : params) desc += fmt::format(" {}={}", k, v);
+          const std::string what = point_label(backend, params);
+          if (const auto f = known.find({variant.name, what}); f != known.end()) {
+            fail(variant.name, what, f->second);
+            continue;
+          }
           try {
-            report(fmt::format("{} {}:{}", variant.name, backend, desc));
+            report(fmt::format("{} {}", variant.name, what));
             PointOutcome out = measure_point(bench, spec, backend, params, false, cache, bo);
             out.record["role"] = "sweep";
             account(out);
@@ -362,7 +514,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
           } catch (const RunInterrupted&) {
             throw;
           } catch (const std::exception& e) {
-            fail(variant.name, backend + desc, e.what());
+            fail(variant.name, what, e.what());
           }
         }
     }

@@ -30,7 +30,8 @@
 
 namespace prt {
 class ClContext;
-}
+class Communicator;
+}  // namespace prt
 
 namespace prt::experiments {
 
@@ -50,6 +51,9 @@ struct RunOptions {
   /// For tests: stop (throw RunInterrupted) after measuring this many points, as a killed run
   /// would. 0: never.
   int stop_after_points = 0;
+  /// Spread the points over these ranks (docs/distributed.md; collective: every rank calls with
+  /// the same spec and options). Null or one rank: this process alone.
+  Communicator* comm = nullptr;
 };
 
 /// Thrown by run_experiment when RunOptions::stop_after_points is reached.
@@ -65,6 +69,7 @@ struct RunSummary {
   std::size_t failed = 0;     ///< points (or scenes) that failed, each in result.json "failures"
   std::string first_failure;  ///< "scene point: error" of the first failure, for one-line summaries
   bool complete = false;      ///< .complete written: false when every point failed
+  int ranks = 1;              ///< processes the points were measured on
 };
 
 /// The result folder `spec` writes under `out_root`.

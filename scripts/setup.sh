@@ -17,6 +17,7 @@ PACKAGES=(
   libassimp-dev libmeshoptimizer-dev libspectra-dev liblbfgspp-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   libxxhash-dev libstb-dev libtbb-dev
+  libopenmpi-dev openmpi-bin
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-scipy python3-skimage python3-xxhash python3-pip
 )

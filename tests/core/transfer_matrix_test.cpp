@@ -11,10 +11,11 @@
 #include <random>
 #include <set>
 
-#include "prtlab/sphere/cubemap.h"
 #include "prtlab/base/error.h"
-#include "prtlab/sphere/hemisphere_grid.h"
 #include "prtlab/geometry/procedural_shapes.h"
+#include "prtlab/sphere/cubemap.h"
+#include "prtlab/sphere/hemisphere_grid.h"
+#include "prtlab/transfer/distributed_transfer.h"
 #include "prtlab/transfer/visibility.h"
 
 namespace prt {
@@ -279,6 +280,55 @@ TEST(TransferMatrix, DeterministicAcrossThreadCounts) {
   EXPECT_TRUE(many.transfer == single.transfer);
   ASSERT_TRUE(many.sh && single.sh);
   EXPECT_TRUE(*many.sh == *single.sh);
+}
+
+TEST(TransferMatrix, ATracerGivesAnySplitOfThePointsTheRowsOfTheWhole) {
+  // What a distributed precompute relies on: one tracer, the points in uneven pieces, and every
+  // vertex's rows (and SH matrix) equal to those of the single computation, bit for bit.
+  const Mesh mesh = plane_and_sphere();
+  TransferParams params = quiet_params(8, 4, 2);
+  params.sh_order = 3;
+  const auto whole = compute_transfer(mesh, params);
+  const auto points = vertex_points(mesh);
+  const TransferTracer tracer(mesh, params);
+  const int m = whole.transfer.local_count();
+  const std::size_t cuts[] = {0, 1, 7, points.size() / 2, points.size()};
+  for (std::size_t k = 0; k + 1 < std::size(cuts); ++k) {
+    const std::size_t first = cuts[k], count = cuts[k + 1] - cuts[k];
+    const auto part = tracer.compute(std::span(points).subspan(first, count));
+    ASSERT_EQ(part.transfer.vertex_count(), count);
+    for (std::size_t v = 0; v < count; ++v) {
+      for (int j = 0; j < m; ++j) {
+        const std::size_t a = v * m + j, b = (first + v) * m + j;
+        const auto pa = part.transfer.row_offsets(), pb = whole.transfer.row_offsets();
+        ASSERT_EQ(pa[a + 1] - pa[a], pb[b + 1] - pb[b]) << "vertex " << first + v;
+        for (std::uint32_t e = 0; e < pa[a + 1] - pa[a]; ++e) {
+          ASSERT_EQ(part.transfer.column(pa[a] + e), whole.transfer.column(pb[b] + e));
+          ASSERT_EQ(part.transfer.counts()[pa[a] + e], whole.transfer.counts()[pb[b] + e]);
+        }
+      }
+      const auto sa = part.sh->matrix(v), sb = whole.sh->matrix(first + v);
+      ASSERT_TRUE(std::equal(sa.begin(), sa.end(), sb.begin())) << "SH of vertex " << first + v;
+    }
+  }
+}
+
+TEST(TransferMatrix, OneRankOfADistributedComputationIsTheSingleComputation) {
+  // Without mpirun the world is one process: the distributed entry point is compute_transfer,
+  // and its data checksum tells results apart.
+  const Mesh mesh = plane_and_sphere();
+  TransferParams params = quiet_params(8, 4, 2);
+  params.sh_order = 2;
+  Communicator& world = Communicator::world();
+  ASSERT_FALSE(world.distributed());
+  const auto d = compute_transfer_distributed(mesh, params, world);
+  const auto single = compute_transfer(mesh, params);
+  EXPECT_TRUE(d.result.transfer == single.transfer);
+  EXPECT_EQ(transfer_data_checksum(d.result), transfer_data_checksum(single));
+  ASSERT_EQ(d.shares.size(), 1u);
+  EXPECT_EQ(d.shares[0].points, mesh.vertex_count());
+  params.supersampling = 3;  // another T: another checksum
+  EXPECT_NE(transfer_data_checksum(compute_transfer(mesh, params)), transfer_data_checksum(single));
 }
 
 TEST(TransferMatrix, FromCsrRoundTripsAndRejectsBrokenArrays) {

@@ -63,6 +63,50 @@ SceneTransfer precompute_scene_transfer(const SceneDesc& desc, const PrecomputeO
   SceneTransfer out;
   out.key = h.digest();
   out.cache_file = cache.path_for("transfer", out.key);
+  const auto transfer_params = [&](const SceneDesc& d) {
+    TransferParams p;
+    p.cubemap_resolution = d.cubemap_resolution;
+    p.local_grid = d.local_grid;
+    p.supersampling = d.supersampling;
+    p.sh_order = options.sh_order;
+    p.show_progress = options.show_progress;
+    return p;
+  };
+  if (options.comm && options.comm->distributed()) {
+    Communicator& comm = *options.comm;
+    // One decision for every rank: the root's look at the cache.
+    const bool hit =
+        comm.broadcast(
+            {static_cast<std::uint8_t>(comm.is_root() && options.cache == CacheMode::kUse &&
+                                       cache.contains("transfer", out.key))})[0] != 0;
+    out.holds_result = comm.is_root();
+    if (hit) {
+      if (comm.is_root())
+        // A cached file found corrupt on loading is recomputed here, by the root alone.
+        out.result = cache.get_or_compute(
+            "transfer", out.key,
+            [&] {
+              return save_transfer(compute_transfer(build_scene(desc).mesh, transfer_params(desc)));
+            },
+            [](const ArchiveReader& r) { return load_transfer(r); }, CacheMode::kUse);
+      out.cache_hit = true;
+      out.seconds = seconds_since(t0);
+      return out;
+    }
+    const auto tm = std::chrono::steady_clock::now();
+    const Scene scene = build_scene(desc);
+    out.mesh_seconds = seconds_since(tm);
+    DistributedTransfer d = compute_transfer_distributed(scene.mesh, transfer_params(desc), comm);
+    if (comm.is_root()) {
+      cache.fetch(
+          "transfer", out.key, [&] { return save_transfer(d.result); }, [](const ArchiveReader&) {},
+          options.cache == CacheMode::kOff ? CacheMode::kOff : CacheMode::kRefresh);
+      out.result = std::move(d.result);
+      out.shares = std::move(d.shares);
+    }
+    out.seconds = seconds_since(t0);
+    return out;
+  }
   bool computed = false;
   out.result = cache.get_or_compute(
       "transfer", out.key,
@@ -71,13 +115,7 @@ SceneTransfer precompute_scene_transfer(const SceneDesc& desc, const PrecomputeO
         const auto tm = std::chrono::steady_clock::now();
         const Scene scene = build_scene(desc);
         out.mesh_seconds = seconds_since(tm);
-        TransferParams p;
-        p.cubemap_resolution = desc.cubemap_resolution;
-        p.local_grid = desc.local_grid;
-        p.supersampling = desc.supersampling;
-        p.sh_order = options.sh_order;
-        p.show_progress = options.show_progress;
-        return save_transfer(compute_transfer(scene.mesh, p));
+        return save_transfer(compute_transfer(scene.mesh, transfer_params(desc)));
       },
       [](const ArchiveReader& r) { return load_transfer(r); }, options.cache);
   out.cache_hit = !computed;

@@ -15,6 +15,7 @@ ArchiveWriter save_transfer(const TransferResult& result) {
   const TransferStats& s = result.stats;
   w.add_meta("stats", nlohmann::json{{"points", s.points},
                                      {"threads", s.threads},
+                                     {"ranks", s.ranks},
                                      {"subrays", s.subrays},
                                      {"rays_traced", s.rays_traced},
                                      {"rays_unblocked", s.rays_unblocked},
@@ -64,6 +65,7 @@ TransferResult load_transfer(const ArchiveReader& r) {
     TransferStats& st = out.stats;
     st.points = j.value("points", std::size_t{0});
     st.threads = j.value("threads", 0);
+    st.ranks = j.value("ranks", 1);
     st.subrays = j.value("subrays", std::uint64_t{0});
     st.rays_traced = j.value("rays_traced", std::uint64_t{0});
     st.rays_unblocked = j.value("rays_unblocked", std::uint64_t{0});

@@ -259,7 +259,7 @@ std::int64_t thread_cpu_ns() {
 
 }  // namespace
 
-TransferResult compute_transfer(const Mesh& mesh, const TransferParams& params) {
+std::vector<SurfacePoint> vertex_points(const Mesh& mesh) {
   if (mesh.normals.size() != mesh.vertex_count()) {
     throw ParameterError(fmt::format(
         "compute_transfer: the mesh has {} normals for {} vertices (compute normals first)",
@@ -276,28 +276,65 @@ TransferResult compute_transfer(const Mesh& mesh, const TransferParams& params) 
     points[v].position = Vec3d(mesh.positions[v]);
     points[v].frame = mesh.frame(v);
   }
+  return points;
+}
+
+TransferResult compute_transfer(const Mesh& mesh, const TransferParams& params) {
+  const std::vector<SurfacePoint> points = vertex_points(mesh);
   return compute_transfer(mesh, points, params);
 }
 
 TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePoint> points,
                                 const TransferParams& params) {
+  return TransferTracer(occluders, params).compute(points);
+}
+
+struct TransferTracer::Tables {
+  Tables(const Mesh& occluders, const TransferParams& p)
+      : params(p),
+        grid(p.local_grid),
+        layout(p.cubemap_resolution),
+        dirs(p.cubemap_resolution, p.supersampling),
+        cells(grid),
+        scene(occluders, p.ray_offset_relative) {
+    if (p.sh_order > 0) sh_integrator.emplace(dirs, p.sh_order);
+  }
+  TransferParams params;
+  HemisphereGrid grid;
+  CubemapLayout layout;
+  SupersampledCubemap dirs;
+  CellLookup cells;
+  EmbreeScene scene;
+  std::optional<ShTransferIntegrator> sh_integrator;
+  double setup_seconds = 0;
+};
+
+TransferTracer::TransferTracer(const Mesh& occluders, const TransferParams& params) {
   const auto t_start = std::chrono::steady_clock::now();
-  const HemisphereGrid grid(params.local_grid);
-  const CubemapLayout layout(params.cubemap_resolution);
-  const SupersampledCubemap dirs(params.cubemap_resolution, params.supersampling);
-  if (grid.cell_count() > 65535)
+  if (static_cast<long long>(params.local_grid) * params.local_grid > 65535)
     throw ParameterError("compute_transfer: M = S^2 must be below 65536");
+  tables_ = std::make_unique<Tables>(occluders, params);
+  tables_->setup_seconds = seconds_since(t_start);
+}
+
+TransferTracer::~TransferTracer() = default;
+TransferTracer::TransferTracer(TransferTracer&&) noexcept = default;
+TransferTracer& TransferTracer::operator=(TransferTracer&&) noexcept = default;
+
+TransferResult TransferTracer::compute(std::span<const SurfacePoint> points) const {
+  const auto t_start = std::chrono::steady_clock::now();
+  const Tables& tb = *tables_;
+  const TransferParams& params = tb.params;
+  const HemisphereGrid& grid = tb.grid;
+  const CubemapLayout& layout = tb.layout;
+  const SupersampledCubemap& dirs = tb.dirs;
   const int m = grid.cell_count();
   const int n = layout.pixel_count();
-  const CellLookup cells(grid);
-
-  const EmbreeScene scene(occluders, params.ray_offset_relative);
-  std::optional<ShTransferIntegrator> sh_integrator;
+  const CellLookup& cells = tb.cells;
+  const EmbreeScene& scene = tb.scene;
+  const std::optional<ShTransferIntegrator>& sh_integrator = tb.sh_integrator;
   TransferResult result;
-  if (params.sh_order > 0) {
-    sh_integrator.emplace(dirs, params.sh_order);
-    result.sh.emplace(params.sh_order, points.size());
-  }
+  if (params.sh_order > 0) result.sh.emplace(params.sh_order, points.size());
   for (std::size_t p = 0; p < points.size(); ++p) {
     const double len = glm::length(points[p].frame.n);
     if (!(std::abs(len - 1.0) < 1e-3)) {
@@ -310,7 +347,8 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
   stats.points = points.size();
   stats.threads = tbb::this_task_arena::max_concurrency();
   stats.subrays = static_cast<std::uint64_t>(points.size()) * dirs.subray_count();
-  stats.seconds_setup = seconds_since(t_start);
+  // The tables' build counts as this call's setup, as when compute_transfer builds them itself.
+  stats.seconds_setup = tb.setup_seconds + seconds_since(t_start);
 
   const auto pixel_dirs = layout.directions();
   tbb::enumerable_thread_specific<ThreadScratch> scratch_tls;
@@ -423,7 +461,7 @@ TransferResult compute_transfer(const Mesh& occluders, std::span<const SurfacePo
   stats.thread_seconds_sh = ns_sh.load() * 1e-9;
   stats.seconds_points = seconds_points;
   stats.seconds_assemble = seconds_assemble;
-  stats.seconds_total = seconds_since(t_start);
+  stats.seconds_total = tb.setup_seconds + seconds_since(t_start);
   return result;
 }
 

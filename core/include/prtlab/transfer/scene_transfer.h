@@ -10,9 +10,10 @@
 // normals, frames, procedural shapes) or how T is computed must bump kMeshPipelineVersion.
 #include <filesystem>
 
-#include "prtlab/storage/content_hash.h"
 #include "prtlab/geometry/scene.h"
+#include "prtlab/storage/content_hash.h"
 #include "prtlab/storage/stage_cache.h"
+#include "prtlab/transfer/distributed_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
@@ -23,6 +24,10 @@ struct PrecomputeOptions {
   int sh_order = 0;  ///< 0: no SH transfer
   CacheMode cache = CacheMode::kUse;
   bool show_progress = true;
+  /// Spread a computation over these ranks (collective then: every rank calls with the same
+  /// scene); null or one rank: this process alone. The root decides hit or miss and alone
+  /// reads and writes the cache.
+  Communicator* comm = nullptr;
 };
 
 struct SceneTransfer {
@@ -32,6 +37,10 @@ struct SceneTransfer {
   double seconds = 0;       ///< this call's wall time (load on a hit, build + compute on a miss)
   double mesh_seconds = 0;  ///< building the mesh (0 on a hit)
   std::filesystem::path cache_file;
+  /// Distributed: false on the ranks other than the root, whose `result` is empty.
+  bool holds_result = true;
+  /// Distributed and computed: every rank's share (on the root).
+  std::vector<RankTransferShare> shares;
 };
 
 /// Hash of everything the scene's mesh depends on (scene file bytes, mesh file bytes, version).

@@ -22,14 +22,15 @@
 // are exact. Within a row the columns are strictly increasing. Construction is deterministic:
 // the same inputs give a bit-identical matrix for any thread count.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
 
-#include "prtlab/sphere/local_frame.h"
-#include "prtlab/geometry/mesh.h"
-#include "prtlab/transfer/sh_transfer.h"
 #include "prtlab/base/types.h"
+#include "prtlab/geometry/mesh.h"
+#include "prtlab/sphere/local_frame.h"
+#include "prtlab/transfer/sh_transfer.h"
 
 namespace prt {
 
@@ -131,7 +132,8 @@ struct SurfacePoint {
 /// Counters and timings of one transfer computation.
 struct TransferStats {
   std::size_t points = 0;
-  int threads = 0;                   ///< TBB worker concurrency used
+  int threads = 0;                   ///< TBB worker concurrency used (summed over ranks)
+  int ranks = 1;                     ///< processes the points were spread over
   std::uint64_t subrays = 0;         ///< points * N * s^2 sub-directions considered
   std::uint64_t rays_traced = 0;     ///< sub-rays strictly above the tangent plane (cast)
   std::uint64_t rays_unblocked = 0;  ///< of those, the ones that escaped
@@ -157,6 +159,28 @@ struct TransferResult {
   std::optional<ShTransfer> sh;  ///< when params.sh_order > 0
   TransferStats stats;
 };
+
+/// What compute_transfer builds before its per-point pass (the occluders' BVH, the direction,
+/// cell and SH tables), kept for any number of point sets: compute(points) equals
+/// compute_transfer(occluders, points, params) bit for bit, so a run that splits the points
+/// (compute_transfer_distributed) builds the tables once per process.
+class TransferTracer {
+ public:
+  TransferTracer(const Mesh& occluders, const TransferParams& params);
+  ~TransferTracer();
+  TransferTracer(TransferTracer&&) noexcept;
+  TransferTracer& operator=(TransferTracer&&) noexcept;
+  /// T (and the SH transfer) of these points; the stats' setup time includes the tables' build.
+  TransferResult compute(std::span<const SurfacePoint> points) const;
+
+ private:
+  struct Tables;
+  std::unique_ptr<Tables> tables_;
+};
+
+/// The receiver points of every vertex of `mesh` (its positions and frames); ParameterError on
+/// a missing or degenerate normal.
+std::vector<SurfacePoint> vertex_points(const Mesh& mesh);
 
 /// T (and the SH transfer when asked) for every vertex of `mesh`, which is also the occluder.
 /// Requires normals (tangents where present define the frames: Mesh::frame).

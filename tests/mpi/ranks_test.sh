@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# prtlab on 1, 2 and 4 MPI ranks against one process, on the tiny scene (CTest: mpi.ranks;
+# docs/distributed.md). The ranks are oversubscribed on small machines.
+#   ranks_test.sh PRTLAB MPIEXEC WORK_DIR
+# Checks, each against the single process:
+#   - precompute (T and an SH transfer): the same data checksum on 1, 2 and 4 ranks;
+#   - experiment run fig6 --quick: the same points.csv, timing columns aside, on 2 and 4 ranks,
+#     each with a fresh stage cache of its own that the ranks fill concurrently;
+#   - a killed distributed run resumes to the same points.csv;
+#   - four processes writing the same stage into one cache at once leave a valid entry;
+#   - a command that does not spread over ranks is refused on 2 ranks.
+set -euo pipefail
+PRTLAB="$1" MPIEXEC="$2" WORK="$3"
+HERE="$(cd "$(dirname "$0")" && pwd)"
+rm -rf "$WORK" && mkdir -p "$WORK"
+# Open MPI as root (CI containers), more ranks than cores, no network interfaces needed.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl=self,vader OMPI_MCA_mpi_yield_when_idle=1
+export OMPI_MCA_plm=isolated OMPI_MCA_btl_vader_single_copy_mechanism=none
+mpi() { local n="$1"; shift; "$MPIEXEC" -n "$n" "$@"; }
+checksum() { python3 -c 'import json,sys; print(json.load(sys.stdin)["data_checksum"])'; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+for sh in 0 3; do
+  export PRTLAB_CACHE="$WORK/cache-pre-$sh"
+  one=$("$PRTLAB" -q precompute tiny-sphere-plane --force --sh-order "$sh" --json | checksum)
+  for n in 1 2 4; do
+    got=$(mpi "$n" "$PRTLAB" -q precompute tiny-sphere-plane --force --sh-order "$sh" --json | checksum)
+    [[ "$got" == "$one" ]] || fail "precompute (SH order $sh) on $n ranks: $got, one process: $one"
+    echo "precompute, SH order $sh, $n ranks: data checksum $got (one process: the same)"
+  done
+  # The root's archive loads as a cache hit everywhere and is the same T.
+  hit=$("$PRTLAB" -q precompute tiny-sphere-plane --sh-order "$sh" --json | checksum)
+  [[ "$hit" == "$one" ]] || fail "the cached archive of a distributed precompute differs"
+done
+
+run() {  # run OUT CACHE [mpi N]
+  local out="$1" cache="$2"; shift 2
+  PRTLAB_CACHE="$cache" "$@" "$PRTLAB" -q experiment run fig6 --quick --scenes tiny-sphere-plane \
+    --out "$out" --no-plot --no-opencl > "$out.log" 2>&1 || { cat "$out.log"; fail "run into $out"; }
+}
+run "$WORK/one" "$WORK/cache-one"
+for n in 2 4; do
+  run "$WORK/ranks$n" "$WORK/cache-ranks$n" "$MPIEXEC" -n "$n"
+  python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/ranks$n/fig6-quick/points.csv" \
+    || fail "fig6 --quick on $n ranks differs from one process"
+  [[ -f "$WORK/ranks$n/fig6-quick/.complete" ]] || fail "$n ranks: no .complete"
+done
+
+# Killed part-way (after a few seconds, wherever it is), then run again: the same points.
+PRTLAB_CACHE="$WORK/cache-killed" timeout -s KILL 4 "$MPIEXEC" -n 2 "$PRTLAB" -q experiment run fig6 \
+  --quick --scenes tiny-sphere-plane --out "$WORK/killed" --no-plot --no-opencl > /dev/null 2>&1 || true
+run "$WORK/killed" "$WORK/cache-killed" "$MPIEXEC" -n 2
+python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/killed/fig6-quick/points.csv" \
+  || fail "the resumed distributed run differs"
+
+# Concurrent writers of one stage into one cache (what ranks on a shared folder do).
+export PRTLAB_CACHE="$WORK/cache-shared"
+for i in 1 2 3 4; do "$PRTLAB" -q precompute tiny-sphere-plane --force --sh-order 3 --json > "$WORK/w$i.json" & done
+wait
+one=$(checksum < "$WORK/w1.json")
+for i in 2 3 4; do [[ "$(checksum < "$WORK/w$i.json")" == "$one" ]] || fail "concurrent writer $i"; done
+got=$("$PRTLAB" -q precompute tiny-sphere-plane --sh-order 3 --json)
+[[ "$(echo "$got" | checksum)" == "$one" ]] || fail "the shared cache entry after concurrent writes"
+[[ "$(echo "$got" | python3 -c 'import json,sys; print(json.load(sys.stdin)["cache_hit"])')" == "True" ]] \
+  || fail "the shared cache entry was not a hit"
+[[ -z "$(find "$PRTLAB_CACHE" -name '*.tmp*')" ]] || fail "temporary files left in the cache"
+
+# A command that does not spread over ranks is refused (on every rank, before it writes).
+if mpi 2 "$PRTLAB" -q list > "$WORK/refused.log" 2>&1; then fail "prtlab list ran on 2 ranks"; fi
+grep -q "run this command without mpirun" "$WORK/refused.log" || { cat "$WORK/refused.log"; fail "refusal text"; }
+echo "all MPI checks passed"
