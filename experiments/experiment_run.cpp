@@ -394,7 +394,6 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   // Other processes change every timing; the report records how busy the machine was.
   std::string load;
   if (std::ifstream in("/proc/loadavg"); in) std::getline(in, load);
-  const auto& registry = CompressorRegistry::instance();
 
   const RunPlan plan = plan_run(spec, variants);
   const std::size_t planned = plan.points;

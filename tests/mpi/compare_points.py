@@ -15,7 +15,8 @@ TIMING = re.compile(r"(seconds|_ms|ms_|fps|cache_hit)")
 
 def rows(path):
     with open(path, newline="") as f:
-        reader = csv.DictReader(f)
+        # The provenance comment lines above the header differ by nature (date, command, load).
+        reader = csv.DictReader(line for line in f if not line.startswith("#"))
         keep = [c for c in reader.fieldnames if not TIMING.search(c)]
         return keep, [{c: r[c] for c in keep} for r in reader]
 
@@ -34,7 +35,7 @@ def main():
     for i, (x, y) in enumerate(zip(a, b)):
         for c in ca:
             if x[c] != y[c]:
-                sys.exit(f"row {i + 1} ({x['backend']} {x['params']}), column {c}: "
+                sys.exit(f"row {i + 1} ({x.get('backend')} {x.get('params')}), column {c}: "
                          f"{x[c]!r} vs {y[c]!r}")
     print(f"{len(a)} points, {len(ca)} columns identical")
 

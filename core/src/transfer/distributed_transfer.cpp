@@ -170,10 +170,10 @@ DistributedTransfer compute_transfer_distributed(const Mesh& mesh, const Transfe
     std::uint64_t trailer_size = 0;
     std::memcpy(&trailer_size, bytes.data() + bytes.size() - sizeof trailer_size,
                 sizeof trailer_size);
-    PRT_CHECK(trailer_size <= bytes.size(), "distributed transfer: rank {}'s message is corrupt",
-              r);
-    const std::size_t body = bytes.size() - trailer_size;
-    Bytes tail(std::span<const std::uint8_t>(bytes).subspan(body));
+    PRT_CHECK(trailer_size <= bytes.size() - sizeof trailer_size,
+              "distributed transfer: rank {}'s message is corrupt", r);
+    const std::size_t body = bytes.size() - sizeof trailer_size - trailer_size;
+    Bytes tail(std::span<const std::uint8_t>(bytes).subspan(body, trailer_size));
     const auto n = tail.get<std::uint64_t>();
     RankTransferShare share;
     share.rank = static_cast<int>(r);
