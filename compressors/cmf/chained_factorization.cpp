@@ -78,33 +78,28 @@ void fit_terms(std::span<const double> target, std::span<const double> w, int te
     }
     return t;
   };
+  // Each entry of one factor of term k (P_k on the light side, else R_k) set to its exact
+  // non-negative minimiser with everything else fixed.
+  const auto solve = [&](int k, bool light_side) {
+    double* x = light_side ? p.data() + static_cast<std::size_t>(k) * m
+                           : r.data() + static_cast<std::size_t>(k) * v;
+    const double* y = light_side ? r.data() + static_cast<std::size_t>(k) * v
+                                 : p.data() + static_cast<std::size_t>(k) * m;
+    const int nx = light_side ? m : v, ny = light_side ? v : m;
+    for (int a = 0; a < nx; ++a) {
+      double num = 0, den = 0;
+      for (int c = 0; c < ny; ++c) {
+        const int j = light_side ? a : c, e = light_side ? c : a;
+        const double b = y[c] * weight(static_cast<std::size_t>(e) * m + j);
+        num += left(k, j, e) * b;
+        den += b * b;
+      }
+      if (den > 0) x[a] = std::max(num / den, 0.0);
+    }
+  };
   for (int it = 0; it < sweeps; ++it) {
-    for (int k = 0; k < terms; ++k) {
-      double* pk = p.data() + static_cast<std::size_t>(k) * m;
-      const double* rk = r.data() + static_cast<std::size_t>(k) * v;
-      for (int j = 0; j < m; ++j) {
-        double num = 0, den = 0;
-        for (int e = 0; e < v; ++e) {
-          const double b = rk[e] * weight(static_cast<std::size_t>(e) * m + j);
-          num += left(k, j, e) * b;
-          den += b * b;
-        }
-        if (den > 0) pk[j] = std::max(num / den, 0.0);
-      }
-    }
-    for (int k = 0; k < terms; ++k) {
-      const double* pk = p.data() + static_cast<std::size_t>(k) * m;
-      double* rk = r.data() + static_cast<std::size_t>(k) * v;
-      for (int e = 0; e < v; ++e) {
-        double num = 0, den = 0;
-        for (int j = 0; j < m; ++j) {
-          const double b = pk[j] * weight(static_cast<std::size_t>(e) * m + j);
-          num += left(k, j, e) * b;
-          den += b * b;
-        }
-        if (den > 0) rk[e] = std::max(num / den, 0.0);
-      }
-    }
+    for (int k = 0; k < terms; ++k) solve(k, true);
+    for (int k = 0; k < terms; ++k) solve(k, false);
   }
 }
 
