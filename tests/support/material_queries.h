@@ -77,4 +77,21 @@ inline double device_vs_cpp_eval_lights(ClContext& ctx,
   return worst;
 }
 
+/// The same over nearest and bilinear texel filtering; `where` names the filter too.
+inline double device_vs_cpp_eval_lights(ClContext& ctx,
+                                        std::span<const CompressedMaterial* const> parts,
+                                        std::span<const MaterialQuery> queries, int m,
+                                        std::string* where = nullptr) {
+  double worst = 0;
+  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
+    std::string at;
+    const double d = device_vs_cpp_eval_lights(ctx, parts, queries, filter, m, &at);
+    if (d >= worst) {
+      worst = d;
+      if (where) *where = at + (filter == TexelFilter::kNearest ? ", nearest" : ", bilinear");
+    }
+  }
+  return worst;
+}
+
 }  // namespace prt::testing

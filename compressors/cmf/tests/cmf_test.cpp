@@ -285,21 +285,11 @@ TEST(Cmf, TermsOnTheDeviceMatchTheCppReference) {
         "cmf", {{"half_side", "6"}, {"clusters", "8"}, {"refine", "2"}, {"terms", terms}}, btf));
   const std::vector<const CompressedMaterial*> parts = {held[0].get(), held[1].get(),
                                                         held[2].get()};
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<float> uv(-0.5f, 1.5f), xy(-1.0f, 1.0f);
-  std::vector<MaterialQuery> qs;
-  for (int i = 0; i < 60; ++i) {
-    Vec3 e(xy(rng), xy(rng), std::abs(xy(rng)) + 0.05f);
-    qs.push_back({i % 3, Vec2(uv(rng), uv(rng)), glm::normalize(e)});
-  }
+  const auto qs = testing::material_queries(3, 5, 60);
   // A few float products and sums per value, in the same order: rounding only.
-  for (const auto filter : {TexelFilter::kNearest, TexelFilter::kBilinear}) {
-    std::string where;
-    EXPECT_LE(
-        testing::device_vs_cpp_eval_lights(*ctx, parts, qs, filter, btf->light_count(), &where),
-        1e-6)
-        << where << (filter == TexelFilter::kNearest ? ", nearest" : ", bilinear");
-  }
+  std::string where;
+  EXPECT_LE(testing::device_vs_cpp_eval_lights(*ctx, parts, qs, btf->light_count(), &where), 1e-6)
+      << where;
 }
 
 TEST(Cmf, TermsSurviveSaveAndLoadAndAnOlderStateHasOne) {
