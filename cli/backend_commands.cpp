@@ -10,6 +10,7 @@
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/light_options.h"
 #include "prtlab/compress/material_registry.h"
+#include "prtlab/distributed/communicator.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/opencl/cl_device.h"
 #include "prtlab/render/frame_renderer.h"
@@ -190,11 +191,35 @@ void run_compress(const CompressCli& o) {
   StageCache cache;
   PrepareOptions popt;
   popt.show_progress = !global_options().quiet;
+  Communicator& world = Communicator::world();
+  if (world.distributed()) {
+    // On several ranks the transfer is computed by all of them (or found in the cache by the
+    // root), then every rank loads it and compresses collectively: a backend that can split its
+    // work (bicluster's groups) does, the others compute the same result on every rank. The
+    // cache is on a shared folder (docs/distributed.md), so the root's look decides for all.
+    PrecomputeOptions pre;
+    pre.show_progress = popt.show_progress;
+    pre.comm = &world;
+    (void)precompute_scene_transfer(desc, pre, cache);
+    world.barrier();
+  }
   const PreparedScene scene = prepare_scene(desc, entry.inputs, cache, popt);
   const TransferMatrix& t = scene.transfer.result.transfer;
-  CompressionResult cr =
-      compress_cached(o.backend, params, scene.input(entry), scene.transfer.key, cache,
-                      o.force ? CacheMode::kRefresh : CacheMode::kUse, !global_options().quiet);
+  CacheMode mode = o.force ? CacheMode::kRefresh : CacheMode::kUse;
+  std::optional<CollectiveScope> together;
+  if (world.distributed()) {
+    const Hash128 key = compression_key(o.backend, params, scene.transfer.key);
+    const bool hit =
+        world.broadcast(
+            {static_cast<std::uint8_t>(world.is_root() && mode == CacheMode::kUse &&
+                                       cache.contains(compression_stage(o.backend), key))})[0] != 0;
+    if (!hit) mode = CacheMode::kRefresh;
+    together.emplace(world);
+  }
+  CompressionResult cr = compress_cached(o.backend, params, scene.input(entry), scene.transfer.key,
+                                         cache, mode, !global_options().quiet);
+  together.reset();
+  if (!world.is_root()) return;  // the root measures and reports
   auto ctx = open_device_from_options();
   const auto lights = evaluation_lights(desc.cubemap_resolution, o.lights);
   const BackendEvaluation ev = evaluate_backend(

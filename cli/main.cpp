@@ -21,7 +21,7 @@ namespace {
 // launched on several ranks would run once per rank, each writing the same files.
 bool runs_distributed(const CLI::App& app) {
   for (const CLI::App* sub : app.get_subcommands()) {
-    if (sub->get_name() == "precompute") return true;
+    if (sub->get_name() == "precompute" || sub->get_name() == "compress") return true;
     if (sub->get_name() == "experiment")
       for (const CLI::App* what : sub->get_subcommands())
         if (what->get_name() == "run" || what->get_name() == "all") return true;
@@ -94,8 +94,8 @@ int run(int argc, char** argv) {
     const Communicator& world = Communicator::world();
     if (world.distributed() && !runs_distributed(app))
       throw ParameterError(fmt::format(
-          "running on {} MPI ranks: only `prtlab precompute` and `prtlab experiment run|all` "
-          "spread over ranks; run this command without mpirun",
+          "running on {} MPI ranks: only `prtlab precompute`, `prtlab compress` and `prtlab "
+          "experiment run|all` spread over ranks; run this command without mpirun",
           world.size()));
     // Only the root prints progress bars and info lines; the others say what they do through
     // their [rank r/N] progress lines.

@@ -9,11 +9,15 @@
 #include <chrono>
 #include <iterator>
 #include <map>
+#include <mutex>
+#include <optional>
 #include <random>
 #include <unordered_map>
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/distributed/byte_stream.h"
+#include "prtlab/distributed/work_queue.h"
 
 namespace prt::bicluster {
 
@@ -478,26 +482,107 @@ std::uint64_t group_seed(std::uint64_t seed, int group) {
   return z ^ (z >> 31);
 }
 
+namespace {
+
+void put(ByteWriter& w, const Biclustering& b) {
+  w.put<std::uint64_t>(b.biclusters.size());
+  for (const Bicluster& c : b.biclusters) {
+    w.put_array(c.rows);
+    w.put_array(c.cols);
+    w.put_array(c.constants);
+  }
+  w.put_array(b.residual);
+}
+
+Biclustering get(ByteReader& r) {
+  Biclustering b;
+  b.biclusters.resize(r.get<std::uint64_t>());
+  for (Bicluster& c : b.biclusters) {
+    c.rows = r.get_array<std::uint32_t>();
+    c.cols = r.get_array<std::uint32_t>();
+    c.constants = r.get_array<std::int32_t>();
+  }
+  b.residual = r.get_array<Term>();
+  return b;
+}
+
+// The groups over the ranks of a collective run (prtlab compress under mpirun): a work queue
+// hands them out, each rank searches its groups as one process would, and every rank receives
+// every group's part, so the concatenation and merge below are those of one process.
+std::vector<Biclustering> search_groups_on_ranks(Communicator& comm, const SparseCounts& t,
+                                                 const std::vector<std::size_t>& bounds,
+                                                 const SearchOptions& options, Progress& progress) {
+  const std::size_t groups = bounds.size() - 1;
+  log_debug("bicluster: {} groups over {} ranks", groups, comm.size());
+  std::vector<std::uint8_t> mine;
+  ByteWriter w(mine);
+  {
+    // Each of the rank's threads takes groups from the queue (one at a time: the queue is
+    // not thread-safe) until none is left.
+    WorkQueue queue(comm, groups);
+    std::mutex lock;
+    const int workers = tbb::this_task_arena::max_concurrency();
+    tbb::parallel_for(0, workers, [&](int) {
+      for (;;) {
+        std::optional<std::size_t> g;
+        {
+          const std::lock_guard hold(lock);
+          g = queue.next();
+        }
+        if (!g) return;
+        const Biclustering part =
+            search_rows(t, bounds[*g], bounds[*g + 1],
+                        group_seed(options.seed, static_cast<int>(*g)), progress);
+        const std::lock_guard hold(lock);
+        w.put<std::uint64_t>(*g);
+        put(w, part);
+      }
+    });
+  }
+  std::vector<std::uint8_t> all;
+  for (const auto& bytes : comm.gather(mine)) all.insert(all.end(), bytes.begin(), bytes.end());
+  all = comm.broadcast(std::move(all));
+  std::vector<Biclustering> parts(groups);
+  std::vector<bool> seen(groups, false);
+  ByteReader r(all, "bicluster groups");
+  while (!r.done()) {
+    const auto g = r.get<std::uint64_t>();
+    PRT_CHECK(g < groups && !seen[g], "bicluster: group {} came twice or out of range", g);
+    seen[g] = true;
+    parts[g] = get(r);
+  }
+  for (std::size_t g = 0; g < groups; ++g)
+    PRT_CHECK(seen[g], "bicluster: group {} of {} never arrived", g, groups);
+  return parts;
+}
+
+}  // namespace
+
 Biclustering search(const SparseCounts& t, const SearchOptions& options, Progress& progress) {
   PRT_CHECK(options.groups >= 1, "groups = {}", options.groups);
   const auto bounds = group_bounds(t, options.rows_per_vertex, options.groups);
   std::vector<Biclustering> parts(static_cast<std::size_t>(options.groups));
-  // One task per group; each group's search is sequential with its own seed, so the parts do
-  // not depend on which thread runs them.
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, parts.size(), 1),
-      [&](const auto& range) {
-        for (std::size_t g = range.begin(); g < range.end(); ++g) {
-          const auto start = std::chrono::steady_clock::now();
-          parts[g] = search_rows(t, bounds[g], bounds[g + 1],
-                                 group_seed(options.seed, static_cast<int>(g)), progress);
-          log_debug("bicluster group {}: rows [{}, {}), {} biclusters, {:.2f} s on thread {}", g,
-                    bounds[g], bounds[g + 1], parts[g].biclusters.size(),
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                    tbb::this_task_arena::current_thread_index());
-        }
-      },
-      tbb::simple_partitioner());
+  if (Communicator* comm = collective(); comm && comm->distributed()) {
+    parts = search_groups_on_ranks(*comm, t, bounds, options, progress);
+  } else {
+    // One task per group; each group's search is sequential with its own seed, so the parts do
+    // not depend on which thread runs them.
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, parts.size(), 1),
+        [&](const auto& range) {
+          for (std::size_t g = range.begin(); g < range.end(); ++g) {
+            const auto start = std::chrono::steady_clock::now();
+            parts[g] = search_rows(t, bounds[g], bounds[g + 1],
+                                   group_seed(options.seed, static_cast<int>(g)), progress);
+            log_debug(
+                "bicluster group {}: rows [{}, {}), {} biclusters, {:.2f} s on thread {}", g,
+                bounds[g], bounds[g + 1], parts[g].biclusters.size(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                tbb::this_task_arena::current_thread_index());
+          }
+        },
+        tbb::simple_partitioner());
+  }
   Biclustering out;
   out.rows = t.rows;
   out.cols = t.cols;

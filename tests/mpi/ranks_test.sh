@@ -7,6 +7,7 @@
 #   - experiment run fig6 --quick: the same points.csv, timing columns aside, on 2 and 4 ranks,
 #     each with a fresh stage cache of its own that the ranks fill concurrently;
 #   - a killed distributed run resumes to the same points.csv;
+#   - compress with bicluster's row groups over the ranks: the one-process result;
 #   - four processes writing the same stage into one cache at once leave a valid entry;
 #   - a command that does not spread over ranks is refused on 2 ranks.
 set -euo pipefail
@@ -54,6 +55,24 @@ PRTLAB_CACHE="$WORK/cache-killed" timeout -s TERM 4 "$MPIEXEC" -n 2 "$PRTLAB" -q
 run "$WORK/killed" "$WORK/cache-killed" "$MPIEXEC" -n 2
 python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/killed/fig6-quick/points.csv" \
   || fail "the resumed distributed run differs"
+
+# A collective compression: bicluster's row groups spread over the ranks give the one-process
+# result (exact and lossy), other backends compute the same result on every rank.
+export PRTLAB_CACHE="$WORK/cache-compress"
+summary() { python3 -c 'import json,sys; j=json.load(sys.stdin); print(j["storage_bytes"], j["mflops_per_relight"], j["rel_l2_error_mean"], j["frobenius_rel_error"])'; }
+for params in "groups=4" "groups=5 error=0.05"; do
+  args=(-q --no-opencl compress tiny-sphere-plane --backend bicluster --force --json --no-image)
+  for p in $params; do args+=(--param "$p"); done
+  one=$("$PRTLAB" "${args[@]}" | summary)
+  for n in 2 4; do
+    got=$(mpi "$n" "$PRTLAB" "${args[@]}" | summary)
+    [[ "$got" == "$one" ]] || fail "bicluster $params on $n ranks: $got, one process: $one"
+  done
+  echo "compress bicluster $params on 2 and 4 ranks: $one (one process: the same)"
+done
+one=$("$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend cpca --force --json --no-image | summary)
+got=$(mpi 2 "$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend cpca --force --json --no-image | summary)
+[[ "$got" == "$one" ]] || fail "cpca on 2 ranks: $got, one process: $one"
 
 # Concurrent writers of one stage into one cache (what ranks on a shared folder do).
 export PRTLAB_CACHE="$WORK/cache-shared"

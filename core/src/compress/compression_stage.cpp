@@ -3,12 +3,28 @@
 #include <chrono>
 #include <filesystem>
 
-#include "prtlab/storage/archive.h"
-#include "prtlab/compress/compressor_registry.h"
 #include "prtlab/base/error.h"
+#include "prtlab/compress/compressor_registry.h"
+#include "prtlab/storage/archive.h"
 #include "prtlab/transfer/transfer_matrix.h"
 
 namespace prt {
+
+std::string compression_stage(const std::string& backend) {
+  return "compressed-" + backend;
+}
+
+Hash128 compression_key(const std::string& backend,
+                        const std::map<std::string, std::string>& params,
+                        const Hash128& transfer_key) {
+  const auto& entry = CompressorRegistry::instance().get(backend);
+  Hasher h;
+  h.add("compressed-transfer").add(backend).add(entry.version).add(entry.origin).add(transfer_key);
+  // A plugin rebuilt in place must not reuse results of its previous build.
+  if (entry.origin != "built-in" && std::filesystem::exists(entry.origin)) h.add_file(entry.origin);
+  for (const auto& [k, v] : ParamSet(backend, entry.params, params).canonical()) h.add(k).add(v);
+  return h.digest();
+}
 
 CompressionResult compress_cached(const std::string& backend,
                                   const std::map<std::string, std::string>& params,
@@ -20,16 +36,11 @@ CompressionResult compress_cached(const std::string& backend,
   const ParamSet validated(backend, entry.params, params);
   CompressionResult out;
   out.params = validated.canonical();
-  Hasher h;
-  h.add("compressed-transfer").add(backend).add(entry.version).add(entry.origin).add(transfer_key);
-  // A plugin rebuilt in place must not reuse results of its previous build.
-  if (entry.origin != "built-in" && std::filesystem::exists(entry.origin)) h.add_file(entry.origin);
-  for (const auto& [k, v] : out.params) h.add(k).add(v);
-  out.key = h.digest();
+  out.key = compression_key(backend, params, transfer_key);
 
   bool computed = false;
   cache.fetch(
-      "compressed-" + backend, out.key,
+      compression_stage(backend), out.key,
       [&] {
         computed = true;
         auto compressor = entry.create(validated);

@@ -80,6 +80,18 @@ bool launched_by_mpi() {
   return launched_size() >= 0;
 }
 
+namespace {
+std::atomic<Communicator*> g_collective{nullptr};
+}  // namespace
+
+CollectiveScope::CollectiveScope(Communicator& comm) : previous_(g_collective.exchange(&comm)) {}
+CollectiveScope::~CollectiveScope() {
+  g_collective.store(previous_);
+}
+Communicator* collective() {
+  return g_collective.load();
+}
+
 std::string Communicator::description() const {
   if (!mpi_) return "1 process";
 #ifdef PRTLAB_HAVE_MPI

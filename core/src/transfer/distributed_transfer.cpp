@@ -8,55 +8,13 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/progress.h"
 #include "prtlab/base/statistics.h"
+#include "prtlab/distributed/byte_stream.h"
 #include "prtlab/distributed/work_queue.h"
 #include "prtlab/sphere/cubemap.h"
 #include "prtlab/storage/content_hash.h"
 
 namespace prt {
 namespace {
-
-// Appends plain values and arrays to a byte buffer, and reads them back in the same order.
-class Bytes {
- public:
-  explicit Bytes(std::vector<std::uint8_t>* out) : out_(out) {}
-  explicit Bytes(std::span<const std::uint8_t> in) : in_(in) {}
-
-  template <class T>
-  void put(const T& x) {
-    const auto* b = reinterpret_cast<const std::uint8_t*>(&x);
-    out_->insert(out_->end(), b, b + sizeof x);
-  }
-  template <class T>
-  void put_array(std::span<const T> xs) {
-    put<std::uint64_t>(xs.size());
-    const auto* b = reinterpret_cast<const std::uint8_t*>(xs.data());
-    out_->insert(out_->end(), b, b + xs.size_bytes());
-  }
-  template <class T>
-  T get() {
-    T x;
-    take(&x, sizeof x);
-    return x;
-  }
-  template <class T>
-  std::vector<T> get_array() {
-    const auto n = get<std::uint64_t>();
-    PRT_CHECK(n <= (in_.size() - at_) / sizeof(T), "distributed transfer: a truncated message");
-    std::vector<T> xs(static_cast<std::size_t>(n));
-    take(xs.data(), xs.size() * sizeof(T));
-    return xs;
-  }
-
- private:
-  void take(void* dst, std::size_t n) {
-    PRT_CHECK(at_ + n <= in_.size(), "distributed transfer: a truncated message");
-    std::memcpy(dst, in_.data() + at_, n);
-    at_ += n;
-  }
-  std::vector<std::uint8_t>* out_ = nullptr;
-  std::span<const std::uint8_t> in_;
-  std::size_t at_ = 0;
-};
 
 struct Chunk {
   std::vector<std::uint32_t> offsets, columns;
@@ -107,7 +65,7 @@ DistributedTransfer compute_transfer_distributed(const Mesh& mesh, const Transfe
   Progress progress(fmt::format("transfer (rank 0 of {})", ranks),
                     static_cast<std::int64_t>(chunks), params.show_progress && comm.is_root());
   std::vector<std::uint8_t> message;
-  Bytes w(&message);
+  ByteWriter w(message);
   std::vector<std::uint64_t> taken;
   TransferStats sum;
   {
@@ -140,7 +98,7 @@ DistributedTransfer compute_transfer_distributed(const Mesh& mesh, const Transfe
   const double seconds_tracing = seconds_since(t_start);
   // The rank's totals follow its chunks; the last 8 bytes say how long they are.
   std::vector<std::uint8_t> trailer;
-  Bytes tw(&trailer);
+  ByteWriter tw(trailer);
   tw.put<std::uint64_t>(taken.size());
   tw.put(sum.subrays);
   tw.put(sum.rays_traced);
@@ -173,7 +131,8 @@ DistributedTransfer compute_transfer_distributed(const Mesh& mesh, const Transfe
     PRT_CHECK(trailer_size <= bytes.size() - sizeof trailer_size,
               "distributed transfer: rank {}'s message is corrupt", r);
     const std::size_t body = bytes.size() - sizeof trailer_size - trailer_size;
-    Bytes tail(std::span<const std::uint8_t>(bytes).subspan(body, trailer_size));
+    ByteReader tail(std::span<const std::uint8_t>(bytes).subspan(body, trailer_size),
+                    "distributed transfer");
     const auto n = tail.get<std::uint64_t>();
     RankTransferShare share;
     share.rank = static_cast<int>(r);
@@ -188,7 +147,7 @@ DistributedTransfer compute_transfer_distributed(const Mesh& mesh, const Transfe
     stats.threads += tail.get<int>();
     share.seconds_tracing = tail.get<double>();
     share.bytes_sent = tail.get<std::uint64_t>() + (r == 0 ? 0 : bytes.size());
-    Bytes in(std::span<const std::uint8_t>(bytes).first(body));
+    ByteReader in(std::span<const std::uint8_t>(bytes).first(body), "distributed transfer");
     for (std::uint64_t k = 0; k < n; ++k) {
       const auto index = in.get<std::uint64_t>();
       Chunk c;

@@ -22,6 +22,13 @@ struct CompressionResult {
   double seconds = 0;           ///< this call (load on a hit)
 };
 
+/// The stage and the key compress_cached files a result under (what a collective run asks the
+/// cache before it compresses).
+std::string compression_stage(const std::string& backend);
+Hash128 compression_key(const std::string& backend,
+                        const std::map<std::string, std::string>& params,
+                        const Hash128& transfer_key);
+
 CompressionResult compress_cached(const std::string& backend,
                                   const std::map<std::string, std::string>& params,
                                   const TransferInput& input, const Hash128& transfer_key,

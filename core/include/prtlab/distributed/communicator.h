@@ -68,6 +68,24 @@ class DistributedSession {
   [[noreturn]] static void abort(int code);
 };
 
+/// Marks what runs inside it as collective over `comm`: every rank runs the same computation
+/// (`prtlab compress` on several ranks), so a backend may split its own work over the ranks
+/// (bicluster's row groups). Outside a scope, as in an experiment's point that one rank measures
+/// alone, collective() is null and every backend computes alone.
+class CollectiveScope {
+ public:
+  explicit CollectiveScope(Communicator& comm);
+  ~CollectiveScope();
+  CollectiveScope(const CollectiveScope&) = delete;
+  CollectiveScope& operator=(const CollectiveScope&) = delete;
+
+ private:
+  Communicator* previous_;
+};
+
+/// The communicator of the innermost CollectiveScope, or null.
+Communicator* collective();
+
 /// Whether this build can run on several processes (prtlab built with MPI).
 bool mpi_available();
 /// Whether the environment says an MPI starter launched this process.
