@@ -199,6 +199,7 @@ void run_compress(const CompressCli& o) {
     // cache is on a shared folder (docs/distributed.md), so the root's look decides for all.
     PrecomputeOptions pre;
     pre.show_progress = popt.show_progress;
+    pre.sh_order = entry.inputs.sh_order;  // the transfer prepare_scene asks for
     pre.comm = &world;
     (void)precompute_scene_transfer(desc, pre, cache);
     world.barrier();
@@ -213,8 +214,12 @@ void run_compress(const CompressCli& o) {
         world.broadcast(
             {static_cast<std::uint8_t>(world.is_root() && mode == CacheMode::kUse &&
                                        cache.contains(compression_stage(o.backend), key))})[0] != 0;
-    if (!hit) mode = CacheMode::kRefresh;
-    together.emplace(world);
+    // Only a computation is collective: on a hit each rank loads (a rank that finds the entry
+    // unreadable recomputes alone, outside the scope).
+    if (!hit) {
+      mode = CacheMode::kRefresh;
+      together.emplace(world);
+    }
   }
   CompressionResult cr = compress_cached(o.backend, params, scene.input(entry), scene.transfer.key,
                                          cache, mode, !global_options().quiet);

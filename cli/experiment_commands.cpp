@@ -278,6 +278,7 @@ void run_all(const RunCli& o) {
   std::vector<std::string> failures;
   const auto files = experiments::experiment_files();
   for (const auto& file : files) {
+    bool collective_done = false;  // the ranks' part of this file is behind them
     try {
       if (experiments::is_stability_suite(file)) {
         run_own_kind(
@@ -303,7 +304,12 @@ void run_all(const RunCli& o) {
       }
       const auto spec = experiments::parse_experiment(file, variant, registered_backends());
       const auto folder = experiments::result_folder(spec, o.out);
-      if (!o.force && std::filesystem::exists(folder / ".complete")) {
+      bool complete = std::filesystem::exists(folder / ".complete");
+      // The root's folder decides for every rank (the results may live on its filesystem only).
+      if (Communicator::world().distributed())
+        complete =
+            Communicator::world().broadcast({static_cast<std::uint8_t>(complete && root)})[0] != 0;
+      if (!o.force && complete) {
         if (!quiet)
           std::fprintf(stderr, "== experiment %s: %s is complete (--force reruns it)\n",
                        file.stem().string().c_str(), folder.string().c_str());
@@ -313,9 +319,14 @@ void run_all(const RunCli& o) {
         std::fprintf(stderr, "== experiment %s%s\n", file.stem().string().c_str(),
                      variant.empty() ? "" : (" (" + variant + ")").c_str());
       const auto summary = run_one(file, variant, o, ctx ? &*ctx : nullptr);
+      collective_done = true;
       print_run(summary, false);
       check_run(summary);
     } catch (const Error& e) {
+      // On several ranks a file one rank gave up on inside its collectives would leave the
+      // others waiting there: that error ends the run (every rank). Failed points, reported by
+      // the root after the ranks' part, do not.
+      if (Communicator::world().distributed() && !collective_done) throw;
       std::fprintf(stderr, "prtlab: error: %s\n", e.what());
       failures.push_back(file.string());
     }

@@ -18,6 +18,7 @@
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/light_options.h"
 #include "prtlab/distributed/work_queue.h"
+#include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/image_error.h"
 #include "prtlab/storage/atomic_file.h"
 #include "result_images.h"
@@ -260,6 +261,14 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
     if (o.on_progress)
       o.on_progress(fmt::format("[rank {}/{}] {}", comm.rank(), comm.size(), line));
   };
+  // Every rank must file its points under the root's keys, which name the device.
+  const std::string device = bo.device ? bo.device->info().label() : std::string("none");
+  const auto root_device = comm.broadcast(std::vector<std::uint8_t>(device.begin(), device.end()));
+  if (comm.any(std::string(root_device.begin(), root_device.end()) != device))
+    throw ParameterError(fmt::format(
+        "the ranks measure on different OpenCL devices (rank 0: '{}', rank {}: '{}'): the root "
+        "would find none of the others' points; give every rank the same --device",
+        std::string(root_device.begin(), root_device.end()), comm.rank(), device));
   json failures = json::array();
   const auto failed = [&](const std::string& scene, const std::string& what,
                           const std::string& why) {
@@ -301,6 +310,9 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
   }
   json mine = json::array();
   failures.swap(mine);  // from here, this rank's own
+  // The scenes' stages were just stored (refreshed, with --recompute): the points load them.
+  BenchOptions stored = bo;
+  stored.cache_mode = CacheMode::kUse;
   std::optional<SceneBench> bench;
   std::size_t bench_of = variants.size();
   {
@@ -313,11 +325,13 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
       try {
         if (bench_of != t.variant) {
           bench.reset();
-          bench.emplace(prepare_bench(v, spec, cache, bo));
+          bench_of = variants.size();
+          bench.emplace(prepare_bench(v, spec, cache, stored));
           bench_of = t.variant;
         }
         if (spec.kind == ExperimentKind::kEqualStorage) {
-          const std::uint64_t target = storage_target(spec, *bench, cache, bo, bo.show_progress);
+          const std::uint64_t target =
+              storage_target(spec, *bench, cache, stored, bo.show_progress);
           (void)measure_at_equal_storage(spec, *bench, v.name, t.backend, target, cache, bo, say);
         } else {
           say(fmt::format("{} {}", v.name, what));
@@ -362,7 +376,11 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
   for (const auto& s : spec.scenes)
     for (auto& v : scene_variants(s, spec.scene_grid, cache.root() / "derived-scenes"))
       variants.push_back(std::move(v));
-  const bool was_complete = fs::exists(folder / ".complete");
+  bool was_complete = fs::exists(folder / ".complete");
+  // The root's folder decides for every rank (the results may live on its filesystem only).
+  if (o.comm && o.comm->distributed())
+    was_complete =
+        o.comm->broadcast({static_cast<std::uint8_t>(was_complete && o.comm->is_root())})[0] != 0;
   if (was_complete && !o.force)
     throw ParameterError(fmt::format(
         "{} holds a complete run; pass --force to overwrite it, or redraw its report with "

@@ -70,9 +70,11 @@ for params in "groups=4" "groups=5 error=0.05"; do
   done
   echo "compress bicluster $params on 2 and 4 ranks: $one (one process: the same)"
 done
-one=$("$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend cpca --force --json --no-image | summary)
-got=$(mpi 2 "$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend cpca --force --json --no-image | summary)
-[[ "$got" == "$one" ]] || fail "cpca on 2 ranks: $got, one process: $one"
+for backend in cpca sh_biscale; do  # sh_biscale: the ranks compute the SH transfer it asks for
+  one=$("$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend "$backend" --force --json --no-image | summary)
+  got=$(mpi 2 "$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend "$backend" --force --json --no-image | summary)
+  [[ "$got" == "$one" ]] || fail "$backend on 2 ranks: $got, one process: $one"
+done
 
 # Concurrent writers of one stage into one cache (what ranks on a shared folder do).
 export PRTLAB_CACHE="$WORK/cache-shared"
