@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Strong scaling of prtlab's MPI paths on this machine (results/mpi/; docs/distributed.md).
 #   bash scripts/mpi_scaling.sh [OUT=results/mpi]
-# Precompute of the chair (16,422 vertices) and `experiment run pareto --quick` on the tiny scene,
+# Precompute of the chair (16,101 vertices) and `experiment run pareto --quick` on the tiny scene,
 # each on 1 process (1 and all threads) and on 2 and 4 ranks of 1 thread, every run from an
 # empty stage cache of its own; the bicluster search of the bunny in 1-16 row groups, and its
 # groups on 2 ranks; then the cluster cost model over the recorded experiments. Writes
@@ -73,5 +73,6 @@ for g in 2 4; do run_bic "1 process, 2 threads" "$g" "$PRTLAB"; done
 for g in 2 4; do run_bic "2 ranks x 1 thread" "$g" mpiexec -n 2 "$PRTLAB" --threads 1; done
 
 python3 scripts/mpi_cost_model.py --tables results/table1.json results/table2.json -- \
-  results/{fig6,fig8,pareto,skip,sh-biscale,sh-order,haar-light-sweep}/result.json > "$OUT/cost-model.md"
+  results/{fig6,fig8,pareto,skip,sh-biscale,sh-order,haar-light-sweep}/result.json results/cpca-paper \
+  > "$OUT/cost-model.md"
 echo "wrote $OUT/precompute.jsonl $OUT/experiment.txt $OUT/bicluster-groups.jsonl $OUT/cost-model.md"
