@@ -13,6 +13,7 @@
 #include "point_measurement.h"
 #include "provenance.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
@@ -538,6 +539,14 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
     scenes.push_back(std::move(scene_info));
   }
   mark_pareto(points);
+  // After a distributed first pass every point is in the shared cache; a point the root has to
+  // compute again means the ranks wrote where the root does not read (a node-local cache), and
+  // the run quietly became a one-process run on the root.
+  if (summary.ranks > 1 && computed > 0)
+    log_warn_named("ranks-cache-not-shared",
+                   "the root computed {} of {} points again that the {} ranks had measured: is "
+                   "the stage cache ({}) on a filesystem every node shares? (docs/distributed.md)",
+                   computed, computed + hits, summary.ranks, cache.root().string());
 
   const json spec_json = to_json(spec);
   json prov_json = to_json(prov);
@@ -555,6 +564,7 @@ RunSummary run_experiment(const ExperimentSpec& spec_in, const RunOptions& o) {
                  {"cache",
                   {{"points_from_cache", hits},
                    {"points_computed", computed},
+                   {"points_recomputed_by_root", summary.ranks > 1 ? computed : 0},
                    {"seconds_saved", saved_seconds},
                    {"seconds_computing", computed_seconds},
                    {"stage_cache", cache.root().string()},

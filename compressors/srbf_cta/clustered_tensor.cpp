@@ -2,21 +2,25 @@
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
 #include <chrono>
+#include <mutex>
 #include <numeric>
 #include <random>
 
+#include "prtlab/base/deterministic_reduce.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/numeric/elbg.h"
 #include "prtlab/numeric/row_set.h"
+#include "prtlab/numeric/symmetric_eigen.h"
 #include "prtlab/numeric/truncated_pca.h"
+#include "srbf_cta/cluster_unfolding.h"
 
 namespace prt::srbf_cta {
 namespace {
@@ -46,17 +50,31 @@ RightSingular top_right_singular(const RowMajorMatrixXd& a, Eigen::Index k) {
     TruncatedPca p = truncated_pca(RowSet::dense(a), o);
     return {std::move(p.components), std::move(p.singular_values)};
   }
-  const Eigen::MatrixXd g = a.transpose() * a;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
-  if (eig.info() != Eigen::Success)
-    throw Error("srbf_cta: the eigen-decomposition of a mode Gram matrix did not converge");
-  const Eigen::Index n = g.rows();
-  RightSingular r{Eigen::MatrixXd(n, k), Eigen::VectorXd(k)};
-  for (Eigen::Index j = 0; j < k; ++j) {
-    r.v.col(j) = eig.eigenvectors().col(n - 1 - j);
-    r.sigma[j] = std::sqrt(std::max(0.0, eig.eigenvalues()[n - 1 - j]));
-  }
-  return r;
+  // A^T A's lower triangle (all the solver reads), then its top k eigenpairs.
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(a.cols(), a.cols());
+  g.selfadjointView<Eigen::Lower>().rankUpdate(a.transpose());
+  SymmetricEigen e = top_symmetric_eigen(g, k);
+  return {std::move(e.vectors), e.values.cwiseMax(0.0).cwiseSqrt()};
+}
+
+/// out = a * b over fixed row blocks of `a`, in parallel: the same on any thread count.
+template <class A, class B>
+Eigen::Matrix<typename A::Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows_product(
+    const A& a, const B& b) {
+  Eigen::Matrix<typename A::Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(a.rows(),
+                                                                                         b.cols());
+  constexpr Eigen::Index kBlock = 64;
+  const Eigen::Index blocks = (a.rows() + kBlock - 1) / kBlock;
+  tbb::parallel_for(
+      tbb::blocked_range<Eigen::Index>(0, blocks, 1),
+      [&](const auto& r) {
+        for (Eigen::Index blk = r.begin(); blk != r.end(); ++blk) {
+          const Eigen::Index r0 = blk * kBlock, n = std::min(kBlock, a.rows() - r0);
+          out.middleRows(r0, n).noalias() = a.middleRows(r0, n) * b;
+        }
+      },
+      tbb::simple_partitioner());
+  return out;
 }
 
 class Cta {
@@ -81,11 +99,19 @@ class Cta {
 
   CtaModel run() {
     auto t0 = Clock::now();
-    initialise();
-    m_.times.initialisation = seconds_since(t0);
+    bool converged = false;
+    if (o_.resume != nullptr) {
+      resume(*o_.resume);
+      converged = o_.resume->clustering_converged;
+    } else {
+      initialise();
+      m_.times.initialisation = seconds_since(t0);
+      checkpoint(false);
+    }
     t0 = Clock::now();
-    clustering();
-    m_.times.clustering = seconds_since(t0);
+    const double clustering_before = m_.times.clustering;
+    if (!converged) clustering();
+    m_.times.clustering = clustering_before + seconds_since(t0);
     t0 = Clock::now();
     approximation();
     m_.times.approximation = seconds_since(t0);
@@ -128,15 +154,17 @@ class Cta {
   void initialise() {
     t0_ = Clock::now();
     const auto i1 = static_cast<Eigen::Index>(t_.view), i2 = static_cast<Eigen::Index>(t_.light);
-    tbb::combinable<Eigen::MatrixXd> gram([&] { return Eigen::MatrixXd::Zero(i1, i1); });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_.vertices, 16), [&](const auto& r) {
-      Eigen::MatrixXd& g = gram.local();
-      for (std::size_t x = r.begin(); x != r.end(); ++x) {
-        const MapF xm(t_.vertex(x), i1, i2);
-        g += (xm * xm.transpose()).cast<double>();
-      }
-    });
-    view_basis(gram.combine([](const auto& a, const auto& b) { return (a + b).eval(); }));
+    view_basis(deterministic_reduce(
+        t_.vertices, 16, Eigen::MatrixXd::Zero(i1, i1).eval(),
+        [&](std::size_t begin, std::size_t end) {
+          Eigen::MatrixXd g = Eigen::MatrixXd::Zero(i1, i1);
+          for (std::size_t x = begin; x != end; ++x) {
+            const MapF xm(t_.vertex(x), i1, i2);
+            g += (xm * xm.transpose()).cast<double>();
+          }
+          return g;
+        },
+        [](Eigen::MatrixXd acc, const Eigen::MatrixXd& g) { return (acc + g).eval(); }));
     project_view();
     log_debug("srbf_cta: view basis and Z in {:.2f} s", seconds_since(t0_));
     ElbgOptions e;
@@ -173,9 +201,26 @@ class Cta {
       const Eigen::HouseholderQR<Eigen::MatrixXd> qr(y.cast<double>());
       return (qr.householderQ() * Eigen::MatrixXd::Identity(y.rows(), y.cols())).cast<float>();
     };
-    MatF q = orth(zm * omega);
-    q = orth(zm * (zm.transpose() * q).eval());
-    const MatF b = q.transpose() * zm;  // k x d
+    // Z^T q over fixed blocks of Z's columns (each one product over all vertices), so that it
+    // is the same on any thread count.
+    const auto zt_times = [&](const MatF& q) -> MatF {
+      MatF out(d, q.cols());
+      constexpr Eigen::Index kBlock = 1024;
+      const Eigen::Index blocks = (d + kBlock - 1) / kBlock;
+      tbb::parallel_for(
+          tbb::blocked_range<Eigen::Index>(0, blocks, 1),
+          [&](const auto& r) {
+            for (Eigen::Index blk = r.begin(); blk != r.end(); ++blk) {
+              const Eigen::Index c0 = blk * kBlock, n = std::min(kBlock, d - c0);
+              out.middleRows(c0, n).noalias() = zm.middleCols(c0, n).transpose() * q;
+            }
+          },
+          tbb::simple_partitioner());
+      return out;
+    };
+    MatF q = orth(rows_product(zm, omega));
+    q = orth(rows_product(zm, zt_times(q)));
+    const MatF b = zt_times(q).transpose();  // k x d
     const Eigen::MatrixXd g = (b * b.transpose()).cast<double>();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
     // Coordinates Z V_k = Q U S: the principal axes' order does not matter to distances.
@@ -192,16 +237,40 @@ class Cta {
       m_.clusters[m_.assignments[x]].members.push_back(static_cast<std::uint32_t>(x));
   }
 
-  void refit(const std::vector<char>& which, bool warm) {
+  /// Refits the clusters marked in `which`. After a reclassification (`from_reclassification`)
+  /// a warm cluster starts from its members' weights W_x under the bases that classified them
+  /// (reclassify() keeps them): HOOI's light step first, with the orthonormalised W as the vertex
+  /// basis, then the vertex step. Its error then never exceeds the reclassification's, with one
+  /// vertex step where starting from the old dual basis takes two. A reseeded cluster refits
+  /// from scratch, as its trial fit did.
+  void refit(const std::vector<char>& which, bool warm, bool from_reclassification = false) {
+    const auto t0 = Clock::now();
+    step_stats_.reset();
     tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
-      if (which[c]) fit_cluster(m_.clusters[c], vertex_bases_[c], warm, true);
+      if (!which[c]) return;
+      const bool reseeded = from_reclassification && reseeded_[c];
+      fit_cluster(m_.clusters[c], vertex_bases_[c], warm && !reseeded, true,
+                  from_reclassification && !reseeded ? &moved_weights_ : nullptr);
     });
     m_.refit_errors.push_back(total_error());
+    std::vector<std::size_t> sizes;
+    for (std::size_t c = 0; c < m_.clusters.size(); ++c)
+      if (which[c]) sizes.push_back(m_.clusters[c].members.size());
+    std::sort(sizes.begin(), sizes.end());
+    if (!sizes.empty())
+      log_debug(
+          "srbf_cta: refit of {} clusters (members min {}, median {}, max {}) in {:.2f} s: {} "
+          "vertex steps ({} with Y formed, {} subspace iterations, {:.2f} s summed), {} light "
+          "steps ({:.2f} s summed)",
+          sizes.size(), sizes.front(), sizes[sizes.size() / 2], sizes.back(), seconds_since(t0),
+          step_stats_.vertex_steps, step_stats_.formed, step_stats_.iterations,
+          step_stats_.vertex_seconds, step_stats_.light_steps, step_stats_.light_seconds);
   }
 
   /// Modes 2 and 3 of the cluster's sub-tensor of Z with its members fixed (HOOI); the vertex
   /// basis U_v (members x r) goes to `uv`, W_x to the model when `store_weights`.
-  void fit_cluster(CtaCluster& c, Eigen::MatrixXd& uv, bool warm, bool store_weights) {
+  void fit_cluster(CtaCluster& c, Eigen::MatrixXd& uv, bool warm, bool store_weights,
+                   const RowMajorMatrixXd* start_weights = nullptr) {
     const auto m = static_cast<Eigen::Index>(c.members.size());
     const auto i2 = static_cast<Eigen::Index>(t_.light);
     if (m == 0) {
@@ -212,43 +281,78 @@ class Cta {
       return;
     }
     if (!warm || c.light.rows() != i2) {
-      // HOSVD start: the mode-2 Gram of the members' Z_x, summed in float (a start only).
-      Eigen::MatrixXf g = Eigen::MatrixXf::Zero(i2, i2);
-      for (Eigen::Index k = 0; k < m; ++k) {
-        const MapF zx(z(c.members[k]), r1_, i2);
-        g.selfadjointView<Eigen::Lower>().rankUpdate(zx.transpose());
-      }
+      // HOSVD start: the mode-2 Gram of the members' Z_x, summed in float (a start only) over
+      // fixed member blocks, in order.
+      const Eigen::MatrixXf g = deterministic_reduce(
+          c.members.size(), 64, Eigen::MatrixXf(Eigen::MatrixXf::Zero(i2, i2)),
+          [&](std::size_t begin, std::size_t end) {
+            Eigen::MatrixXf b = Eigen::MatrixXf::Zero(i2, i2);
+            for (std::size_t k = begin; k < end; ++k)
+              b.selfadjointView<Eigen::Lower>().rankUpdate(
+                  MapF(z(c.members[k]), r1_, i2).transpose());
+            return b;
+          },
+          [](Eigen::MatrixXf acc, const Eigen::MatrixXf& b) {
+            acc += b;
+            return acc;
+          });
+      c.dual.resize(0, 0);  // its coordinates were those of the light basis replaced here
       const Eigen::MatrixXd gd = g.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gd);
-      c.light = eig.eigenvectors().rightCols(r2_).rowwise().reverse();
+      c.light = top_symmetric_eigen(gd, r2_).vectors;
     }
-    vertex_step(c, uv, store_weights);
-    for (int s = 0; s < o_.hooi_sweeps; ++s) {
+    int sweeps = o_.hooi_sweeps;
+    const Eigen::Index r = c.dual.rows();
+    if (warm && start_weights != nullptr && o_.hooi_sweeps >= 1 && r > 0 && c.light.rows() == i2) {
+      Eigen::MatrixXd w(m, r);
+      for (Eigen::Index k = 0; k < m; ++k) w.row(k) = start_weights->row(c.members[k]).head(r);
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(w);
+      uv = qr.householderQ() * Eigen::MatrixXd::Identity(m, std::min(m, r));
       light_step(c, uv);
-      vertex_step(c, uv, store_weights);
+      vertex_step(c, uv, store_weights, true);
+      --sweeps;
+    } else {
+      vertex_step(c, uv, store_weights, false);
+    }
+    for (int s = 0; s < sweeps; ++s) {
+      light_step(c, uv);
+      vertex_step(c, uv, store_weights, true);
     }
   }
 
-  void vertex_step(CtaCluster& c, Eigen::MatrixXd& uv, bool store_weights) {
+  /// The dual vertex basis from the top right singular vectors of the cluster's unfolding
+  /// (cluster_unfolding.h), started from the cluster's previous basis: `uv` (its members'
+  /// coordinates) when `from_left`, else its dual basis, both valid for the current light basis.
+  void vertex_step(CtaCluster& c, Eigen::MatrixXd& uv, bool store_weights, bool from_left) {
+    const auto t0 = Clock::now();
     const auto m = static_cast<Eigen::Index>(c.members.size());
     const Eigen::Index w = static_cast<Eigen::Index>(r1_) * r2_;
-    RowMajorMatrixXd y(m, w);
-    const Eigen::MatrixXf lf = c.light.cast<float>();
-    const auto i2 = static_cast<Eigen::Index>(t_.light);
-    tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
-      const MatF p = MapF(z(c.members[k]), r1_, i2) * lf;  // R1 x R2
-      y.row(k) = Eigen::Map<const Eigen::RowVectorXf>(p.data(), w).cast<double>();
-    });
     const Eigen::Index want = std::min<Eigen::Index>(r3_, m);
-    const RightSingular s = top_right_singular(y, want);
+    VertexModeOptions vo;
+    vo.rank = want;
+    vo.seed = o_.seed + 0x9e3779b97f4a7c15ull * (c.members.empty() ? 0 : c.members[0] + 1);
+    const bool have_right = c.dual.cols() == w && c.dual.rows() > 0;
+    const bool have_left = from_left && uv.rows() == m && uv.cols() > 0;
+    const int expected_products = have_right || have_left ? 8 : 16;
+    const ClusterUnfolding y(z_.data(), r1_, static_cast<Eigen::Index>(t_.light), c.members,
+                             c.light, std::min<Eigen::Index>(want + vo.oversampling, w),
+                             expected_products);
+    const Eigen::MatrixXd start_right =
+        have_right ? Eigen::MatrixXd(c.dual.transpose()) : Eigen::MatrixXd();
+    VertexMode s = top_vertex_mode(y, vo, have_right && !have_left ? &start_right : nullptr,
+                                   have_left ? &uv : nullptr);
+    Eigen::MatrixXd& v = s.v;
+    const Eigen::VectorXd& sigma = s.sigma;
+    step_stats_.add_vertex(seconds_since(t0), s.iterations, y.formed());
     // Eq. 16 inverts the core's row Gram: only directions with a singular value survive it.
-    const double floor = (s.sigma.size() > 0 ? s.sigma[0] : 0.0) * 1e-9;
+    const double floor = (sigma.size() > 0 ? sigma[0] : 0.0) * 1e-9;
     Eigen::Index r = 0;
-    while (r < want && s.sigma[r] > floor) ++r;
-    c.dual = s.v.leftCols(r).transpose();
-    const Eigen::MatrixXd weights = y * s.v.leftCols(r);  // m x r: W_x, rows
+    while (r < want && sigma[r] > floor) ++r;
+    v.conservativeResize(w, r);
+    c.dual = v.transpose();
+    // W_x = Y v in double from the stored basis: the error below is that of the model as saved.
+    const Eigen::MatrixXd weights = s.weights.leftCols(r);  // m x r: W_x, rows
     uv = weights;
-    for (Eigen::Index j = 0; j < r; ++j) uv.col(j) /= s.sigma[j];
+    for (Eigen::Index j = 0; j < r; ++j) uv.col(j) /= sigma[j];
     double err = 0;
     for (Eigen::Index k = 0; k < m; ++k) {
       err += norms_[c.members[k]] - weights.row(k).squaredNorm();
@@ -262,17 +366,19 @@ class Cta {
   }
 
   void light_step(CtaCluster& c, const Eigen::MatrixXd& uv) {
-    const auto m = static_cast<Eigen::Index>(c.members.size());
     const auto i2 = static_cast<Eigen::Index>(t_.light);
     const Eigen::Index r = uv.cols();
     if (r == 0) return;
-    // Mode 2 of Z_c x_3 U_v^T: rows (j, a) of Q_j = sum_x U_v(x, j) Z_x.
-    RowMajorMatrixXd a = RowMajorMatrixXd::Zero(r * r1_, i2);
-    for (Eigen::Index k = 0; k < m; ++k) {
-      const RowMajorMatrixXd zx = zd(c.members[k]);
-      for (Eigen::Index j = 0; j < r; ++j) a.middleRows(j * r1_, r1_) += uv(k, j) * zx;
-    }
+    const auto t0 = Clock::now();
+    // Mode 2 of Z_c x_3 U_v^T: rows (j, a) of Q_j = sum_x U_v(x, j) Z_x; column j of `g` is
+    // Q_j flattened (row-major R1 x I2), summed over fixed blocks (any thread count, same sum).
+    const Eigen::MatrixXd g =
+        members_transpose_product(z_.data(), static_cast<Eigen::Index>(zsize()), c.members, uv);
+    RowMajorMatrixXd q(r, static_cast<Eigen::Index>(zsize()));
+    for (Eigen::Index j = 0; j < r; ++j) q.row(j) = g.col(j).transpose();
+    const Eigen::Map<const RowMajorMatrixXd> a(q.data(), r * r1_, i2);
     c.light = top_right_singular(a, r2_).v;
+    step_stats_.add_light(seconds_since(t0));
   }
 
   /// Returns the vertices moved and the total error they shed (in double, with these bases).
@@ -293,6 +399,8 @@ class Cta {
     }
     const Eigen::Map<const MatF> zall(z_.data(), static_cast<Eigen::Index>(t_.vertices), zs);
     std::vector<std::uint32_t> next = m_.assignments;
+    moved_weights_.resize(static_cast<Eigen::Index>(t_.vertices), r3_);
+    reseeded_.assign(m_.clusters.size(), 0);
     std::vector<double> gain(t_.vertices, 0.0);
     constexpr Eigen::Index kBlock = 256;
     tbb::parallel_for(
@@ -301,7 +409,8 @@ class Cta {
           const MatF w = zall.middleRows(r.begin(), r.end() - r.begin()) * b.transpose();
           for (Eigen::Index x = r.begin(); x < r.end(); ++x) {
             const auto row = w.row(x - r.begin());
-            const std::uint32_t cur = m_.assignments[static_cast<std::size_t>(x)];
+            const auto xs = static_cast<std::size_t>(x);
+            const std::uint32_t cur = m_.assignments[xs];
             std::uint32_t best = cur;
             double best_kept = -1;
             for (std::size_t c = 0; c < m_.clusters.size(); ++c) {
@@ -310,16 +419,23 @@ class Cta {
                                       .squaredNorm();
               if (kept > best_kept) best_kept = kept, best = static_cast<std::uint32_t>(c);
             }
-            if (best == cur) continue;
-            // The float products choose the candidate; the move is decided in double.
-            const auto xs = static_cast<std::size_t>(x);
-            const double e_cur = error_in(xs, cur), e_new = error_in(xs, best);
-            if (e_new < e_cur) {
-              next[xs] = best;
-              gain[xs] = e_cur - e_new;
+            if (best != cur) {
+              // The float products choose the candidate; the move is decided in double.
+              const double e_cur = error_in(xs, cur), e_new = error_in(xs, best);
+              if (e_new < e_cur) {
+                next[xs] = best;
+                gain[xs] = e_cur - e_new;
+              }
             }
+            // W_x in the cluster it ends in, with the bases that classified: the refit's start.
+            const std::uint32_t fin = next[xs];
+            const Eigen::Index len = first[fin + 1] - first[fin];
+            auto dst = moved_weights_.row(x);
+            dst.setZero();
+            dst.head(len) = row.segment(first[fin], len).template cast<double>();
           }
-        });
+        },
+        tbb::simple_partitioner());  // fixed blocks: the same products on any thread count
     std::size_t moved = 0;
     for (std::size_t x = 0; x < t_.vertices; ++x) moved += next[x] != m_.assignments[x];
     m_.assignments = std::move(next);
@@ -357,6 +473,7 @@ class Cta {
           shed += worst[k].first - trial.squared_error;
           m_.assignments[worst[k].second] = static_cast<std::uint32_t>(c);
           m_.clusters[c].light = trial.light;
+          reseeded_[c] = 1;
           break;
         }
       }
@@ -365,8 +482,28 @@ class Cta {
     return shed;
   }
 
+  void checkpoint(bool converged) {
+    if (!o_.on_checkpoint) return;
+    CtaCheckpoint c{m_, vertex_bases_, converged};
+    o_.on_checkpoint(c);
+  }
+
+  void resume(const CtaCheckpoint& c) {
+    const CtaModel& r = c.model;
+    if (r.view != t_.view || r.light != t_.light || r.assignments.size() != t_.vertices ||
+        r.rank_view != r1_ || r.rank_light != r2_ || r.rank_vertex != r3_ ||
+        c.vertex_bases.size() != r.clusters.size())
+      throw ParameterError(
+          "srbf_cta: the checkpoint to resume from is of another tensor or other ranks");
+    m_ = r;
+    vertex_bases_ = c.vertex_bases;
+    project_view();
+    log_debug("srbf_cta: resumed after {} clustering iterations (squared error {:.6g})",
+              m_.clustering_iterations, total_error());
+  }
+
   void clustering() {
-    for (int it = 0; it < o_.clustering_iterations; ++it) {
+    for (int it = m_.clustering_iterations; it < o_.clustering_iterations; ++it) {
       const double before = total_error();
       const std::vector<std::uint32_t> old = m_.assignments;
       const auto [moved, shed] = reclassify();
@@ -376,6 +513,7 @@ class Cta {
       m_.clustering_iterations = it + 1;
       if (moved == 0) {
         report("clustering", it, before, 0);
+        checkpoint(true);
         break;
       }
       std::vector<char> changed(m_.clusters.size(), 0);
@@ -383,8 +521,15 @@ class Cta {
         if (old[x] != m_.assignments[x]) changed[old[x]] = changed[m_.assignments[x]] = 1;
       for (std::size_t c = 0; c < m_.clusters.size(); ++c)
         if (m_.clusters[c].members.empty()) changed[c] = 1;
-      refit(changed, true);
-      report("clustering", it, total_error(), moved);
+      refit(changed, true, true);
+      const double now = total_error();
+      report("clustering", it, now, moved);
+      // Converged when a whole iteration sheds less than the tolerance's share of the error.
+      if (before > 0 && before - now <= o_.clustering_tolerance * before) {
+        checkpoint(true);
+        break;
+      }
+      if (it + 1 < o_.clustering_iterations) checkpoint(false);
     }
   }
 
@@ -394,11 +539,11 @@ class Cta {
     double previous = total_error();
     for (int it = 0; it < o_.approximation_iterations; ++it) {
       // Mode 1 of every cluster's X_c x_2 U_c^T x_3 U_v,c^T.
-      tbb::combinable<Eigen::MatrixXd> gram([&] { return Eigen::MatrixXd::Zero(i1, i1); });
-      tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
+      const auto cluster_gram = [&](std::size_t c) -> Eigen::MatrixXd {
+        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(i1, i1);
         const CtaCluster& cl = m_.clusters[c];
         const Eigen::MatrixXd& uv = vertex_bases_[c];
-        if (cl.members.empty() || uv.cols() == 0) return;
+        if (cl.members.empty() || uv.cols() == 0) return g;
         std::vector<RowMajorMatrixXd> q(static_cast<std::size_t>(uv.cols()),
                                         RowMajorMatrixXd::Zero(i1, r2_));
         for (std::size_t k = 0; k < cl.members.size(); ++k) {
@@ -407,10 +552,13 @@ class Cta {
           for (Eigen::Index j = 0; j < uv.cols(); ++j)
             q[static_cast<std::size_t>(j)] += uv(static_cast<Eigen::Index>(k), j) * p;
         }
-        Eigen::MatrixXd& g = gram.local();
         for (const RowMajorMatrixXd& qj : q) g += qj * qj.transpose();
-      });
-      view_basis(gram.combine([](const auto& a, const auto& b) { return (a + b).eval(); }));
+        return g;
+      };
+      view_basis(deterministic_reduce(
+          m_.clusters.size(), 1, Eigen::MatrixXd::Zero(i1, i1).eval(),
+          [&](std::size_t c, std::size_t) { return cluster_gram(c); },
+          [](Eigen::MatrixXd acc, const Eigen::MatrixXd& g) { return (acc + g).eval(); }));
       project_view();
       std::vector<char> all(m_.clusters.size(), 1);
       refit(all, true);
@@ -426,8 +574,34 @@ class Cta {
     if (o_.on_pass) o_.on_pass(CtaPass{phase, it, err, moved});
   }
 
+  /// What the refit's steps cost, summed over its clusters (which run in parallel).
+  struct StepStats {
+    std::mutex mutex;
+    double vertex_seconds = 0, light_seconds = 0;
+    int vertex_steps = 0, light_steps = 0, iterations = 0, formed = 0;
+    void reset() {
+      vertex_seconds = light_seconds = 0;
+      vertex_steps = light_steps = iterations = formed = 0;
+    }
+    void add_vertex(double s, int it, bool y_formed) {
+      const std::lock_guard lock(mutex);
+      vertex_seconds += s;
+      ++vertex_steps;
+      iterations += it;
+      formed += y_formed ? 1 : 0;
+    }
+    void add_light(double s) {
+      const std::lock_guard lock(mutex);
+      light_seconds += s;
+      ++light_steps;
+    }
+  };
+
   const TensorView& t_;
   const CtaOptions& o_;
+  StepStats step_stats_;
+  RowMajorMatrixXd moved_weights_;  ///< vertices x R3: W_x in its new cluster, old bases
+  std::vector<char> reseeded_;      ///< clusters an emptied cluster's reseed gave a new start
   Clock::time_point t0_;
   int r1_ = 0, r2_ = 0, r3_ = 0;
   std::vector<double> norms_;

@@ -43,12 +43,22 @@ struct CtaPass {
   std::size_t moved = 0;     ///< vertices that changed cluster (clustering)
 };
 
+struct CtaModel;
+
+/// The state a clustering run continues from: the model after its initialisation
+/// (model.clustering_iterations == 0) or after a clustering iteration, and every cluster's
+/// vertex basis U_v (members x r, in member order). The Z_x are recomputed from the view basis.
+struct CtaCheckpoint;
+
 struct CtaOptions {
   int clusters = 16;
   int rank_view = 0;  ///< R1; 0: I1 (no view truncation)
   int rank_light = 48;
   int rank_vertex = 24;
   int clustering_iterations = 20;
+  /// The clustering phase also stops when an iteration (reclassification and refits) lowers the
+  /// total error by at most this fraction of it (0: only when no vertex moves).
+  double clustering_tolerance = 1e-3;
   int approximation_iterations = 5;
   /// HOOI sweeps (light basis, then vertex basis) per cluster refit.
   int hooi_sweeps = 1;
@@ -59,6 +69,12 @@ struct CtaOptions {
   /// ELBG quantises the Z_x in their top elbg_dims principal directions (0: in full).
   int elbg_dims = 256;
   std::function<void(const CtaPass&)> on_pass;
+  /// Called after the initialisation and after every clustering iteration that leaves more to
+  /// do, with the state a resumed run needs (srbf_cta stores it in the stage cache).
+  std::function<void(const CtaCheckpoint&)> on_checkpoint;
+  /// A state that on_checkpoint handed out for the same tensor and options: the run continues
+  /// from it and ends with the model an uninterrupted run gives, bit for bit.
+  const CtaCheckpoint* resume = nullptr;
 };
 
 struct CtaCluster {
@@ -90,6 +106,12 @@ struct CtaModel {
   int clustering_iterations = 0, approximation_iterations = 0;
   double elbg_squared_error = 0;  ///< of the initial quantisation of the Z_x
   CtaTimes times;
+};
+
+struct CtaCheckpoint {
+  CtaModel model;
+  std::vector<Eigen::MatrixXd> vertex_bases;
+  bool clustering_converged = false;  ///< no vertex moved: the clustering phase is over
 };
 
 /// Throws ParameterError for an inconsistent view, no vertices, or ranks / clusters below 1.

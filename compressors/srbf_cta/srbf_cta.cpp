@@ -5,17 +5,18 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <mutex>
 #include <optional>
 
+#include "prtlab/base/deterministic_reduce.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/base/named_warning.h"
@@ -26,11 +27,14 @@
 #include "prtlab/transfer/brdf_weighted_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
 #include "srbf_cta/clustered_tensor.h"
+#include "srbf_cta/cta_checkpoint.h"
 
 namespace prt::srbf_cta {
 namespace {
 
 constexpr double kIllConditionedGram = 1e10;
+/// The CTA saves its state for a resumed run at most this often.
+constexpr double kCheckpointSeconds = 30.0;
 
 using Clock = std::chrono::steady_clock;
 using MatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -76,10 +80,24 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
                         const CubemapLayout& layout, Progress& progress, std::int64_t budget) {
   const auto t0 = Clock::now();
   const auto n = static_cast<Eigen::Index>(p.basis().size());
-  const Eigen::MatrixXd wt = p.pixel_weights().transpose();  // n_t x N: b's columns
+  // The projection is linear in a row t: c = S t with S = (A + alpha I)^-1 W^T. With many more
+  // rows than pixels (a scene: 210 K rows of 6,144 pixels on the bunny) S is solved once for the
+  // N pixels instead of once per row (n_t^2 per row), and P c = (P S) t gives the error's
+  // ||G c||^2 term: each costs n_t per non-zero of the row. Otherwise (few rows over many
+  // pixels) blocks of rows are solved as they come.
   const Eigen::MatrixXd g = pixel_values(p, layout);
   const Eigen::MatrixXd gt = g.transpose();
-  const MatF pf = (g.transpose() * g).cast<float>();  // P = G^T G
+  const auto pixels = static_cast<std::size_t>(g.rows());
+  const bool per_pixel = t.rows() >= 2 * pixels;
+  Eigen::MatrixXd s, ps, wt;
+  MatF pf;
+  if (per_pixel) {
+    s = p.solve(p.pixel_weights().transpose());  // n_t x N
+    ps = (gt * g) * s;                           // n_t x N
+  } else {
+    wt = p.pixel_weights().transpose();  // n_t x N: b's columns
+    pf = (gt * g).cast<float>();         // P = G^T G
+  }
   Projection out;
   out.coefficients.assign(t.rows() * static_cast<std::size_t>(n), 0.0f);
   constexpr std::size_t kBlock = 1024;
@@ -87,24 +105,41 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   std::atomic<std::size_t> done{0};
   std::int64_t reported = 0;
   std::mutex progress_mutex;
-  const double srbf_sq = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, blocks, 1), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-        for (std::size_t blk = r.begin(); blk != r.end(); ++blk) {
+  const double srbf_sq =
+      deterministic_sum(blocks, 1, [&](std::size_t blk_begin, std::size_t blk_end) {
+        double acc = 0;
+        for (std::size_t blk = blk_begin; blk != blk_end; ++blk) {
           const std::size_t r0 = blk * kBlock, r1 = std::min(t.rows(), r0 + kBlock);
-          Eigen::MatrixXd b = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(r1 - r0));
-          for (std::size_t row = r0; row < r1; ++row)
-            for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
-              b.col(static_cast<Eigen::Index>(row - r0)) +=
-                  static_cast<double>(t.value(e)) * wt.col(t.column(e));
-          const Eigen::MatrixXd c = p.solve(b);
           Eigen::Map<MatF> dst(out.coefficients.data() + r0 * static_cast<std::size_t>(n),
                                static_cast<Eigen::Index>(r1 - r0), n);
-          dst = c.transpose().cast<float>();
-          const MatF cp = dst * pf;
-          for (std::size_t row = r0; row < r1; ++row) {
+          if (!per_pixel) {
+            Eigen::MatrixXd b = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(r1 - r0));
+            for (std::size_t row = r0; row < r1; ++row)
+              for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
+                b.col(static_cast<Eigen::Index>(row - r0)) +=
+                    static_cast<double>(t.value(e)) * wt.col(t.column(e));
+            dst = p.solve(b).transpose().cast<float>();
+            const MatF cp = dst * pf;
+            for (std::size_t row = r0; row < r1; ++row) {
+              const auto i = static_cast<Eigen::Index>(row - r0);
+              acc += static_cast<double>(cp.row(i).dot(dst.row(i))) -
+                     2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
+            }
+          }
+          Eigen::VectorXd c(n), pc(n);
+          for (std::size_t row = r0; per_pixel && row < r1; ++row) {
+            c.setZero();
+            pc.setZero();
+            for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e) {
+              const auto v = static_cast<double>(t.value(e));
+              c += v * s.col(t.column(e));
+              pc += v * ps.col(t.column(e));
+            }
             const auto i = static_cast<Eigen::Index>(row - r0);
-            acc += static_cast<double>(cp.row(i).dot(dst.row(i))) -
+            dst.row(i) = c.transpose().cast<float>();
+            // ||G c - t||^2 - ||t||^2 with the stored (float) c in the cross term and in one
+            // factor of the quadratic one: P c_stored and P c differ by rounding only.
+            acc += pc.dot(dst.row(i).transpose().cast<double>()) -
                    2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
           }
           const std::size_t now = ++done;
@@ -114,8 +149,7 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
           reported = target;
         }
         return acc;
-      },
-      std::plus<>());
+      });
   double t_sq = 0;
   for (std::size_t e = 0; e < t.nnz(); ++e) t_sq += static_cast<double>(t.value(e)) * t.value(e);
   out.frobenius_error = t_sq > 0 ? std::sqrt(std::max(0.0, srbf_sq + t_sq) / t_sq) : 0.0;
@@ -250,26 +284,23 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen
             .cast<double>();
     gc[c] = uc[c].transpose() * pm * uc[c];
   });
-  const double approx = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, a.vertices, 8), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-        for (std::size_t x = r.begin(); x != r.end(); ++x) {
-          const std::size_t c = a.ids[x];
-          const Eigen::Map<const MatF> v(
-              a.duals.data() + c * static_cast<std::size_t>(r3) * r1 * r2, r3, r1 * r2);
-          const Eigen::Map<const Eigen::RowVectorXf> w(a.weights.data() + x * r3, r3);
-          const Eigen::RowVectorXd kv = w.cast<double>() * v.cast<double>();
-          const Eigen::Map<const RowMajorMatrixXd> k(kv.data(), r1, r2);
-          acc += ((k * gc[c]).array() * (h * k).array()).sum();
-          const MatF rows = (u * k * uc[c].transpose()).cast<float>();  // M x n_t
-          for (int m = 0; m < mm; ++m)
-            acc -=
-                2.0 * row_cross(t, x * static_cast<std::size_t>(mm) + static_cast<std::size_t>(m),
-                                gt, rows.row(m).data(), nt);
-        }
-        return acc;
-      },
-      std::plus<>());
+  const double approx = deterministic_sum(a.vertices, 8, [&](std::size_t begin, std::size_t end) {
+    double acc = 0;
+    for (std::size_t x = begin; x != end; ++x) {
+      const std::size_t c = a.ids[x];
+      const Eigen::Map<const MatF> v(a.duals.data() + c * static_cast<std::size_t>(r3) * r1 * r2,
+                                     r3, r1 * r2);
+      const Eigen::Map<const Eigen::RowVectorXf> w(a.weights.data() + x * r3, r3);
+      const Eigen::RowVectorXd kv = w.cast<double>() * v.cast<double>();
+      const Eigen::Map<const RowMajorMatrixXd> k(kv.data(), r1, r2);
+      acc += ((k * gc[c]).array() * (h * k).array()).sum();
+      const MatF rows = (u * k * uc[c].transpose()).cast<float>();  // M x n_t
+      for (int m = 0; m < mm; ++m)
+        acc -= 2.0 * row_cross(t, x * static_cast<std::size_t>(mm) + static_cast<std::size_t>(m),
+                               gt, rows.row(m).data(), nt);
+    }
+    return acc;
+  });
   double t_sq = 0;
   for (std::size_t e = 0; e < t.nnz(); ++e) t_sq += static_cast<double>(t.value(e)) * t.value(e);
   return t_sq > 0 ? std::sqrt(std::max(0.0, approx + t_sq) / t_sq) : 0.0;
@@ -287,11 +318,11 @@ double folded_error(const TransferMatrix& t, const SrbfProjector& p, const Cubem
   const auto nt = static_cast<Eigen::Index>(p.basis().size());
   const auto mm = static_cast<std::size_t>(t.local_count());
   const Eigen::MatrixXd psi_t = fold.light.transpose();
-  const double approx_sq = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, t.vertex_count(), 8), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+  const double approx_sq =
+      deterministic_sum(t.vertex_count(), 8, [&](std::size_t begin, std::size_t end) {
+        double acc = 0;
         RowMajorMatrixXd y;
-        for (std::size_t x = r.begin(); x != r.end(); ++x) {
+        for (std::size_t x = begin; x != end; ++x) {
           approx(x, y);
           acc += ((y * pm).array() * y.array()).sum();
           const MatF rows = (psi_t * y).cast<float>();  // M x n_t
@@ -300,8 +331,7 @@ double folded_error(const TransferMatrix& t, const SrbfProjector& p, const Cubem
                    row_cross(t, x * mm + j, gt, rows.row(static_cast<Eigen::Index>(j)).data(), nt);
         }
         return acc;
-      },
-      std::plus<>());
+      });
   const double t_sq = folded_squared_norm(t, fold);
   return t_sq > 0 ? std::sqrt(std::max(0.0, approx_sq + t_sq) / t_sq) : 0.0;
 }
@@ -410,7 +440,41 @@ class SrbfCtaCompressor final : public Compressor {
              : TensorView{proj.coefficients, t.vertex_count(),
                           static_cast<std::size_t>(t.local_count()),
                           static_cast<std::size_t>(p_.srbfs)};
+    // A long CTA saves its state at most every kCheckpointSeconds (after the initialisation and
+    // after clustering iterations) so that a killed run resumes; a finished run removes it.
+    const std::filesystem::path checkpoint = cta_checkpoint_path(cta_checkpoint_key(view, o));
+    std::optional<CtaCheckpoint> resume = read_cta_checkpoint(checkpoint);
+    if (resume) {
+      o.resume = &*resume;
+      log_info(
+          "{}: resuming the clustered tensor approximation from {} (after {} clustering "
+          "iterations)",
+          kName, checkpoint.string(), resume->model.clustering_iterations);
+    }
+    auto last_checkpoint = Clock::now();
+    o.on_checkpoint = [&](const CtaCheckpoint& c) {
+      if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() <
+          kCheckpointSeconds)
+        return;
+      const auto t1 = Clock::now();
+      try {
+        std::filesystem::create_directories(checkpoint.parent_path());
+        save_cta_checkpoint(c).write(checkpoint);
+        log_debug("{}: checkpoint after {} clustering iterations in {:.2f} s ({})", kName,
+                  c.model.clustering_iterations,
+                  std::chrono::duration<double>(Clock::now() - t1).count(), checkpoint.string());
+      } catch (const std::exception& e) {
+        log_warn_named("srbf_cta-checkpoint-not-written",
+                       "{}: the CTA's checkpoint could not be written ({}); a killed run will "
+                       "start again",
+                       kName, e.what());
+      }
+      last_checkpoint = Clock::now();
+    };
     const CtaModel model = clustered_tensor_approximation(view, o);
+    std::error_code removed;
+    std::filesystem::remove(checkpoint, removed);
+    resume.reset();
     SrbfCtaArrays a =
         encode(model, fold ? Eigen::MatrixXd(fold->view * model.view_basis) : model.view_basis, p_,
                t, bandwidth);
@@ -520,6 +584,14 @@ CompressorEntry registry_entry() {
        1000.0,
        {},
        "reclassification passes at most (the clustering phase stops when no vertex moves)"},
+      {"clustering_tolerance",
+       ParamType::kReal,
+       "1e-3",
+       0.0,
+       1.0,
+       {},
+       "the clustering phase stops when an iteration lowers the error by at most this fraction "
+       "of it; 0: only when no vertex moves"},
       {"approximation_iterations",
        ParamType::kInt,
        "5",
@@ -594,6 +666,7 @@ CompressorEntry registry_entry() {
     p.cta.rank_light = static_cast<int>(ps.get_int("rank_light"));
     p.cta.rank_vertex = static_cast<int>(ps.get_int("rank_vertex"));
     p.cta.clustering_iterations = static_cast<int>(ps.get_int("clustering_iterations"));
+    p.cta.clustering_tolerance = ps.get_real("clustering_tolerance");
     p.cta.approximation_iterations = static_cast<int>(ps.get_int("approximation_iterations"));
     p.cta.hooi_sweeps = static_cast<int>(ps.get_int("hooi_sweeps"));
     p.cta.elbg_rounds = static_cast<int>(ps.get_int("elbg_rounds"));
@@ -613,7 +686,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;
-  e.version = 3;
+  e.version = 4;
   e.published = {
       {"bunny",
        {{"srbfs", "642"},

@@ -301,19 +301,37 @@ TEST_F(StageCacheTest, TemporariesOfKilledProcessesAreRemovedOnFirstUse) {
   const fs::path stale = dir / fmt::format("0123abcd.prt.tmp.{}.0", gone);
   const fs::path live = dir / fmt::format("4567abcd.prt.tmp.{}.3", static_cast<long>(::getppid()));
   const fs::path other = dir / "notes.tmp.txt";  // not a name prtlab makes
+  // The same dead pid on this host (as prtlab names it now) and on another node of a cluster
+  // sharing the folder: only this host's is ours to judge.
+  const fs::path stale_here =
+      dir / fmt::format("89abcdef.prt.tmp.{}.{}.1", atomic_temporary_host(), gone);
+  const fs::path other_node =
+      dir / fmt::format("fedcba98.prt.tmp.not-{}.{}.1", atomic_temporary_host(), gone);
   touch(stale);
   touch(live);
   touch(other);
+  touch(stale_here);
+  touch(other_node);
   (void)cache.get_or_compute("stage", key(1), compute(1), load);
   EXPECT_FALSE(fs::exists(stale)) << "a temporary of process " << gone << " was left";
+  EXPECT_FALSE(fs::exists(stale_here)) << "a temporary of process " << gone << " was left";
   EXPECT_TRUE(fs::exists(live)) << "a running process's temporary was removed";
   EXPECT_TRUE(fs::exists(other));
+  EXPECT_TRUE(fs::exists(other_node)) << "another node's in-flight temporary was removed";
 }
 
 TEST(AtomicFile, TemporaryNamesAreRecognisedExactly) {
   long pid = 0;
-  EXPECT_TRUE(is_atomic_temporary_name("a.prt.tmp.123.4", &pid));
+  std::string host = "x";
+  EXPECT_TRUE(is_atomic_temporary_name("a.prt.tmp.123.4", &pid, &host));
   EXPECT_EQ(pid, 123);
+  EXPECT_EQ(host, "");
+  EXPECT_TRUE(is_atomic_temporary_name("a.prt.tmp.node-07_a.321.4", &pid, &host));
+  EXPECT_EQ(pid, 321);
+  EXPECT_EQ(host, "node-07_a");
+  for (const char* name :
+       {"a.prt.tmp.h.x.4", "a.prt.tmp.h!.1.4", "a.prt.tmp..1.4", "a.prt.tmp.h.1.4.5"})
+    EXPECT_FALSE(is_atomic_temporary_name(name)) << name;
   for (const char* name : {"a.prt", "a.prt.tmp.123", "a.prt.tmp.x.4", "a.prt.tmp.12.4x", ".tmp.1.2",
                            "a.prt.tmp..4", "a.prt.tmp.1.", "a.tmp.1.2.extra"})
     EXPECT_FALSE(is_atomic_temporary_name(name)) << name;

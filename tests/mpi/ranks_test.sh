@@ -4,9 +4,12 @@
 #   ranks_test.sh PRTLAB MPIEXEC WORK_DIR
 # Checks, each against the single process:
 #   - precompute (T and an SH transfer): the same data checksum on 1, 2 and 4 ranks;
-#   - experiment run fig6 --quick: the same points.csv, timing columns aside, on 2 and 4 ranks,
-#     each with a fresh stage cache of its own that the ranks fill concurrently;
+#   - experiment run fig6 --quick: the same points.csv, errors.csv and result.json (points and
+#     failures), timing columns aside, on 2 threads and on
+#     2 and 4 ranks of 2 or 3 threads against one process of 1 thread, each with a fresh stage
+#     cache of its own that the ranks fill concurrently;
 #   - a killed distributed run resumes to the same points.csv;
+#   - node-local caches: the root measures the other ranks' points again, the same, and warns;
 #   - compress with bicluster's row groups over the ranks: the one-process result;
 #   - four processes writing the same stage into one cache at once leave a valid entry;
 #   - a command that does not spread over ranks is refused on 2 ranks.
@@ -35,16 +38,28 @@ for sh in 0 3; do
   [[ "$hit" == "$one" ]] || fail "the cached archive of a distributed precompute differs"
 done
 
-run() {  # run OUT CACHE [mpi N]
-  local out="$1" cache="$2"; shift 2
-  PRTLAB_CACHE="$cache" "$@" "$PRTLAB" -q experiment run fig6 --quick --scenes tiny-sphere-plane \
-    --out "$out" --no-plot --no-opencl > "$out.log" 2>&1 || { cat "$out.log"; fail "run into $out"; }
+# Every rank runs a different number of threads than the single process (1 there, 2 or 3 a rank),
+# so that a reduction whose grouping follows the threads, the ranks or the scheduler shows here
+# on any CPU.
+run() {  # run OUT CACHE THREADS [mpi N]
+  local out="$1" cache="$2" threads="$3"; shift 3
+  PRTLAB_CACHE="$cache" "$@" "$PRTLAB" -q --threads "$threads" experiment run fig6 --quick \
+    --scenes tiny-sphere-plane --out "$out" --no-plot --no-opencl > "$out.log" 2>&1 \
+    || { cat "$out.log"; fail "run into $out"; }
 }
-run "$WORK/one" "$WORK/cache-one"
+run "$WORK/one" "$WORK/cache-one" 1
+# One process on more threads than the first: threads alone must not move a digit either.
+run "$WORK/one-threads" "$WORK/cache-one-threads" 2
+for f in points.csv errors.csv result.json; do
+  python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/$f" "$WORK/one-threads/fig6-quick/$f" \
+    || fail "fig6 --quick on 2 threads: $f differs from 1 thread"
+done
 for n in 2 4; do
-  run "$WORK/ranks$n" "$WORK/cache-ranks$n" "$MPIEXEC" -n "$n"
-  python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/ranks$n/fig6-quick/points.csv" \
-    || fail "fig6 --quick on $n ranks differs from one process"
+  run "$WORK/ranks$n" "$WORK/cache-ranks$n" $((n == 2 ? 2 : 3)) "$MPIEXEC" -n "$n"
+  for f in points.csv errors.csv result.json; do
+    python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/$f" "$WORK/ranks$n/fig6-quick/$f" \
+      || fail "fig6 --quick on $n ranks: $f differs from one process"
+  done
   [[ -f "$WORK/ranks$n/fig6-quick/.complete" ]] || fail "$n ranks: no .complete"
 done
 
@@ -52,9 +67,19 @@ done
 # again: the same points.
 PRTLAB_CACHE="$WORK/cache-killed" timeout -s TERM 4 "$MPIEXEC" -n 2 "$PRTLAB" -q experiment run fig6 \
   --quick --scenes tiny-sphere-plane --out "$WORK/killed" --no-plot --no-opencl > /dev/null 2>&1 || true
-run "$WORK/killed" "$WORK/cache-killed" "$MPIEXEC" -n 2
+run "$WORK/killed" "$WORK/cache-killed" 2 "$MPIEXEC" -n 2
 python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/killed/fig6-quick/points.csv" \
   || fail "the resumed distributed run differs"
+
+# Node-local caches (each rank its own folder, as on nodes without a shared filesystem): the root
+# finds none of the other rank's points, measures them again (the same points) and says so.
+"$MPIEXEC" -n 2 bash -c 'PRTLAB_CACHE="$0/cache-local-${OMPI_COMM_WORLD_RANK:-0}" exec "$1" --threads 1 \
+  experiment run fig6 --quick --scenes tiny-sphere-plane --out "$0/local" --no-plot --no-opencl' \
+  "$WORK" "$PRTLAB" > "$WORK/local.log" 2>&1 || { cat "$WORK/local.log"; fail "run with node-local caches"; }
+grep -q "ranks-cache-not-shared" "$WORK/local.log" \
+  || { cat "$WORK/local.log"; fail "no warning when the root recomputes the ranks' points"; }
+python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/local/fig6-quick/points.csv" \
+  || fail "node-local caches changed the points"
 
 # A collective compression: bicluster's row groups spread over the ranks give the one-process
 # result (exact and lossy), other backends compute the same result on every rank.

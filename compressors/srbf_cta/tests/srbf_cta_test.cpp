@@ -9,8 +9,10 @@
 #include "srbf_cta/srbf_cta.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -23,7 +25,9 @@
 #include "prtlab/transfer/brdf_weighted_transfer.h"
 #include "prtlab/transfer/random_transfer.h"
 #include "prtlab/transfer/transfer_matrix.h"
+#include "srbf_cta/cluster_unfolding.h"
 #include "srbf_cta/clustered_tensor.h"
+#include "srbf_cta/cta_checkpoint.h"
 #include "support/temp_dir.h"
 #include "support/test_light.h"
 
@@ -124,6 +128,158 @@ TEST(ClusteredTensor, ReproducesAnExactlyLowRankClusteredTensor) {
   EXPECT_GT(std::sqrt(short_rank.squared_error / short_rank.total_squared_norm), 1e-2);
 }
 
+TEST(ClusteredTensor, VertexModeOfALargeClusterIsTheTruncatedSvdOfItsUnfolding) {
+  // One cluster of 600 vertices with full view and light ranks: the bases are rotations, so the
+  // error is the tail of the singular values of the 600 x 640 vertex unfolding. 600 members
+  // take the Lanczos path of the vertex Gram matrix; the spectrum has a gap after the 24 kept.
+  const Eigen::Index m = 600, i1 = 8, i2 = 80, rank = 100, kept = 24;
+  std::mt19937_64 rng(5);
+  const Eigen::MatrixXd a = random_orthonormal(m, rank, rng);
+  const Eigen::MatrixXd b = random_orthonormal(i1 * i2, rank, rng);
+  Eigen::VectorXd s(rank);
+  for (Eigen::Index j = 0; j < rank; ++j)
+    s[j] = j < kept ? 2.0 * std::pow(0.97, j) : 0.1 * std::pow(0.99, j);
+  const RowMajorMatrixXd x = a * s.asDiagonal() * b.transpose();
+  Tensor t{
+      {}, static_cast<std::size_t>(m), static_cast<std::size_t>(i1), static_cast<std::size_t>(i2)};
+  for (Eigen::Index i = 0; i < x.size(); ++i) t.values.push_back(static_cast<float>(x.data()[i]));
+  Eigen::MatrixXd xf(m, i1 * i2);
+  for (Eigen::Index i = 0; i < xf.rows(); ++i)
+    for (Eigen::Index j = 0; j < xf.cols(); ++j)
+      xf(i, j) = t.values[static_cast<std::size_t>(i * xf.cols() + j)];
+  const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(xf).singularValues();
+  const double tail = sv.tail(sv.size() - kept).squaredNorm();
+
+  CtaOptions o;
+  o.clusters = 1;
+  o.rank_light = static_cast<int>(i2);
+  o.rank_vertex = static_cast<int>(kept);
+  o.clustering_iterations = 0;
+  const CtaModel model = clustered_tensor_approximation(t.view_of(), o);
+  ASSERT_EQ(model.clusters.size(), 1u);
+  const RowMajorMatrixXd& dual = model.clusters[0].dual;
+  ASSERT_EQ(dual.rows(), kept);
+  EXPECT_LT((dual * dual.transpose() - Eigen::MatrixXd::Identity(kept, kept)).norm(), 1e-10);
+  const double tol = 1e-6 * model.total_squared_norm;
+  EXPECT_NEAR(model.squared_error, tail, tol);
+  EXPECT_NEAR(direct_squared_error(t, model), tail, tol);
+}
+
+TEST(ClusterUnfolding, SubspaceIterationFindsTheTruncatedSvdInBothRepresentations) {
+  // 300 members, Y 300 x (6 x 10): the subspace path (m > twice the block of 12 + 8 vectors).
+  // Its captured energy (the squared norm of the double-precision weights) must be the top
+  // singular values' of a dense SVD of Y, formed (double) or applied through Z (float products).
+  const Eigen::Index m = 300, r1 = 6, i2 = 30, r2 = 10, rank = 12;
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> g;
+  std::vector<float> z(static_cast<std::size_t>(m * r1 * i2));
+  // A decaying spectrum over the members, so that the top 12 are well separated.
+  const Eigen::MatrixXd basis = random_orthonormal(r1 * i2, 40, rng);
+  for (Eigen::Index x = 0; x < m; ++x) {
+    Eigen::VectorXd c(40);
+    for (Eigen::Index j = 0; j < 40; ++j) c[j] = g(rng) * std::pow(0.8, static_cast<double>(j));
+    const Eigen::VectorXd v = basis * c;
+    for (Eigen::Index i = 0; i < r1 * i2; ++i)
+      z[static_cast<std::size_t>(x * r1 * i2 + i)] = static_cast<float>(v[i]);
+  }
+  std::vector<std::uint32_t> members;
+  for (Eigen::Index x = m - 1; x >= 0; --x) members.push_back(static_cast<std::uint32_t>(x));
+  const Eigen::MatrixXd light = random_orthonormal(i2, r2, rng);
+  // Y densely, in double, from the float Z.
+  Eigen::MatrixXd y(m, r1 * r2);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    Eigen::MatrixXd zx(r1, i2);
+    for (Eigen::Index a = 0; a < r1; ++a)
+      for (Eigen::Index b = 0; b < i2; ++b)
+        zx(a, b) =
+            z[static_cast<std::size_t>((members[static_cast<std::size_t>(k)] * r1 + a) * i2 + b)];
+    const RowMajorMatrixXd p = zx * light;
+    y.row(k) = Eigen::Map<const Eigen::RowVectorXd>(p.data(), r1 * r2);
+  }
+  const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(y).singularValues();
+  const double top = sv.head(rank).squaredNorm();
+  using R = ClusterUnfolding::Representation;
+  for (const R rep : {R::kFormed, R::kImplicit}) {
+    const ClusterUnfolding u(z.data(), r1, i2, members, light, rank + 8, 8, rep);
+    ASSERT_EQ(u.formed(), rep == R::kFormed);
+    VertexModeOptions o;
+    o.rank = rank;
+    const VertexMode vm = top_vertex_mode(u, o, nullptr, nullptr);
+    EXPECT_GT(vm.iterations, 0);
+    ASSERT_EQ(vm.v.cols(), rank);
+    EXPECT_LT((vm.v.transpose() * vm.v - Eigen::MatrixXd::Identity(rank, rank)).norm(), 1e-12);
+    // The weights are Y v whatever the iteration's precision (formed, Y is the float product
+    // Z_x U_c, as the model always formed it).
+    EXPECT_LT((vm.weights - y * vm.v).norm(), (rep == R::kFormed ? 1e-6 : 1e-9) * y.norm());
+    const double tol = rep == R::kFormed ? 1e-6 : 1e-5;
+    EXPECT_NEAR(vm.weights.squaredNorm(), top, tol * top)
+        << (rep == R::kFormed ? "formed" : "implicit");
+    for (Eigen::Index j = 0; j < rank; ++j) EXPECT_NEAR(vm.sigma[j], sv[j], 1e-4 * sv[0]);
+    // Started from its own answer, one iteration keeps it (Rayleigh-Ritz over a span holding it).
+    const Eigen::MatrixXd start = vm.v;
+    const VertexMode again = top_vertex_mode(u, o, &start, nullptr);
+    EXPECT_GE(again.weights.squaredNorm(), vm.weights.squaredNorm() * (1 - 1e-6));
+    EXPECT_LE(again.iterations, 3);
+  }
+}
+
+TEST(ClusteredTensor, SameModelOnOneAndOnTwoThreads) {
+  // Clusters large enough for the subspace iteration; every reduction is over fixed blocks, so
+  // the thread count must not move a bit of the model.
+  const Tensor t = random_tensor(500, 6, 40, 23);
+  CtaOptions o;
+  o.clusters = 3;
+  o.rank_light = 12;
+  o.rank_vertex = 6;
+  o.clustering_iterations = 3;
+  o.elbg_dims = 16;
+  CtaModel one, two;
+  tbb::task_arena(1).execute([&] { one = clustered_tensor_approximation(t.view_of(), o); });
+  tbb::task_arena(2).execute([&] { two = clustered_tensor_approximation(t.view_of(), o); });
+  EXPECT_EQ(one.squared_error, two.squared_error);
+  EXPECT_EQ(one.assignments, two.assignments);
+  EXPECT_EQ((one.weights - two.weights).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(ClusteredTensor, ResumedRunEndsWithTheUninterruptedModel) {
+  // The checkpoint after the first clustering iteration, through an archive and back, then run
+  // to the end: the same model as the run that was never stopped.
+  const Tensor t = random_tensor(300, 6, 30, 29);
+  CtaOptions o;
+  o.clusters = 4;
+  o.rank_light = 10;
+  o.rank_vertex = 5;
+  o.clustering_iterations = 4;
+  o.elbg_dims = 16;
+  std::vector<std::vector<std::byte>> saved;
+  std::vector<int> iterations;
+  o.on_checkpoint = [&](const CtaCheckpoint& c) {
+    saved.push_back(save_cta_checkpoint(c).to_bytes());
+    iterations.push_back(c.model.clustering_iterations);
+  };
+  const CtaModel whole = clustered_tensor_approximation(t.view_of(), o);
+  ASSERT_GE(saved.size(), 2u);
+  EXPECT_EQ(iterations.front(), 0);  // after the initialisation
+  for (std::size_t k = 0; k < saved.size(); ++k) {
+    const CtaCheckpoint c =
+        load_cta_checkpoint(ArchiveReader::from_bytes(saved[k], "checkpoint.prt"));
+    CtaOptions r = o;
+    r.on_checkpoint = nullptr;
+    r.resume = &c;
+    const CtaModel resumed = clustered_tensor_approximation(t.view_of(), r);
+    EXPECT_EQ(resumed.squared_error, whole.squared_error) << "from checkpoint " << k;
+    EXPECT_EQ(resumed.assignments, whole.assignments) << "from checkpoint " << k;
+    EXPECT_EQ(resumed.clustering_iterations, whole.clustering_iterations);
+    EXPECT_EQ((resumed.weights - whole.weights).cwiseAbs().maxCoeff(), 0.0);
+  }
+  // A checkpoint of other ranks is refused, never silently used.
+  const CtaCheckpoint c = load_cta_checkpoint(ArchiveReader::from_bytes(saved[0], "c.prt"));
+  CtaOptions other = o;
+  other.rank_vertex = 4;
+  other.resume = &c;
+  EXPECT_THROW(clustered_tensor_approximation(t.view_of(), other), ParameterError);
+}
+
 TEST(ClusteredTensor, ErrorNeverIncreasesAndEveryVertexEndsInItsBestCluster) {
   // Three planted clusters plus noise, clustered into five with too small ranks: vertices move.
   Tensor t = clustered_low_rank(3, 40, 5, 16, 4, 6, 4, 3);
@@ -137,6 +293,7 @@ TEST(ClusteredTensor, ErrorNeverIncreasesAndEveryVertexEndsInItsBestCluster) {
     o.rank_light = 3;
     o.rank_vertex = 2;
     o.clustering_iterations = 50;
+    o.clustering_tolerance = 0;  // until no vertex moves: every vertex in its best cluster
     o.approximation_iterations = 10;
     o.tolerance = 0;
     const CtaModel m = clustered_tensor_approximation(t.view_of(), o);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cmath>
@@ -33,21 +34,25 @@ class Quantiser {
     const Eigen::VectorXd cn = c_.rowwise().squaredNorm();
     constexpr Eigen::Index kBlock = 512;
     const Eigen::Index n = x_.rows();
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kBlock), [&](const auto& r) {
-      // Double products, so that the assignment is the nearest codeword in the distortion's
-      // own arithmetic and a Lloyd pass never raises it.
-      const Eigen::MatrixXd dots =
-          x_.middleRows(r.begin(), r.end() - r.begin()).template cast<double>() * c_.transpose();
-      for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
-        double best = std::numeric_limits<double>::infinity();
-        std::uint32_t arg = 0;
-        for (Eigen::Index c = 0; c < k; ++c) {
-          const double d = cn[c] - 2.0 * dots(i - r.begin(), c);
-          if (d < best) best = d, arg = static_cast<std::uint32_t>(c);
-        }
-        assign_[static_cast<std::size_t>(i)] = arg;
-      }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, n, kBlock),
+        [&](const auto& r) {
+          // Double products, so that the assignment is the nearest codeword in the distortion's
+          // own arithmetic and a Lloyd pass never raises it.
+          const Eigen::MatrixXd dots =
+              x_.middleRows(r.begin(), r.end() - r.begin()).template cast<double>() *
+              c_.transpose();
+          for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
+            double best = std::numeric_limits<double>::infinity();
+            std::uint32_t arg = 0;
+            for (Eigen::Index c = 0; c < k; ++c) {
+              const double d = cn[c] - 2.0 * dots(i - r.begin(), c);
+              if (d < best) best = d, arg = static_cast<std::uint32_t>(c);
+            }
+            assign_[static_cast<std::size_t>(i)] = arg;
+          }
+        },
+        tbb::simple_partitioner());  // fixed blocks: the same products on any thread count
     update_centroids();
     return distortion();
   }

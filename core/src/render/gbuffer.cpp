@@ -3,6 +3,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cmath>
@@ -199,86 +200,88 @@ void GBufferTracer::trace(const Camera& camera, GBuffer& g, PrimaryRays rays) co
     put4(g.view_local, i, f.to_local(-d));
   };
 
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
-                    [&](const tbb::blocked_range2d<int>& r) {
-                      RTCIntersectContext context;
-                      rtcInitIntersectContext(&context);
-                      context.flags =
-                          RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // one origin, neighbouring rays
-                      if (rays == PrimaryRays::kSingle) {
-                        for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
-                          for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-                            const Vec3d d = direction(x, y);
-                            const std::size_t i = g.index(x, y);
-                            put4(g.direction, i, d);
-                            RTCRayHit rh{};
-                            rh.ray.org_x = ox;
-                            rh.ray.org_y = oy;
-                            rh.ray.org_z = oz;
-                            rh.ray.dir_x = static_cast<float>(d.x);
-                            rh.ray.dir_y = static_cast<float>(d.y);
-                            rh.ray.dir_z = static_cast<float>(d.z);
-                            rh.ray.tnear = 0.f;
-                            rh.ray.tfar = kInf;
-                            rh.ray.mask = ~0u;
-                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                            rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect1(im.scene, &context, &rh);
-                            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-                              set_miss(g, i);
-                            else
-                              store_hit(i, d, rh.hit.primID, rh.hit.u, rh.hit.v, rh.ray.tfar);
-                          }
-                        }
-                        return;
-                      }
-                      // Packets of 4 x 4 pixels; lanes outside the image or the mesh's window stay
-                      // invalid.
-                      for (int by = r.rows().begin(); by < r.rows().end(); by += 4) {
-                        for (int bx = r.cols().begin(); bx < r.cols().end(); bx += 4) {
-                          alignas(64) int valid[16];
-                          alignas(64) RTCRayHit16 rh;
-                          Vec3d dirs[16];
-                          bool any = false;
-                          for (int k = 0; k < 16; ++k) {
-                            const int x = bx + (k & 3), y = by + (k >> 2);
-                            valid[k] = 0;
-                            if (x >= r.cols().end() || y >= r.rows().end()) continue;
-                            const Vec3d d = direction(x, y);
-                            dirs[k] = d;
-                            const std::size_t i = g.index(x, y);
-                            put4(g.direction, i, d);
-                            set_miss(g, i);
-                            if (!window.contains(x, y)) continue;
-                            valid[k] = -1;
-                            any = true;
-                            rh.ray.org_x[k] = ox;
-                            rh.ray.org_y[k] = oy;
-                            rh.ray.org_z[k] = oz;
-                            rh.ray.dir_x[k] = static_cast<float>(d.x);
-                            rh.ray.dir_y[k] = static_cast<float>(d.y);
-                            rh.ray.dir_z[k] = static_cast<float>(d.z);
-                            rh.ray.tnear[k] = 0.f;
-                            rh.ray.tfar[k] = kInf;
-                            rh.ray.mask[k] = ~0u;
-                            rh.ray.time[k] = 0.f;
-                            rh.ray.flags[k] = 0;
-                            rh.ray.id[k] = static_cast<unsigned>(k);
-                            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                            rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
-                            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-                          }
-                          if (!any) continue;
-                          rtcIntersect16(valid, im.scene, &context, &rh);
-                          for (int k = 0; k < 16; ++k) {
-                            if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-                            const int x = bx + (k & 3), y = by + (k >> 2);
-                            store_hit(g.index(x, y), dirs[k], rh.hit.primID[k], rh.hit.u[k],
-                                      rh.hit.v[k], rh.ray.tfar[k]);
-                          }
-                        }
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
+      [&](const tbb::blocked_range2d<int>& r) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // one origin, neighbouring rays
+        if (rays == PrimaryRays::kSingle) {
+          for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
+            for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+              const Vec3d d = direction(x, y);
+              const std::size_t i = g.index(x, y);
+              put4(g.direction, i, d);
+              RTCRayHit rh{};
+              rh.ray.org_x = ox;
+              rh.ray.org_y = oy;
+              rh.ray.org_z = oz;
+              rh.ray.dir_x = static_cast<float>(d.x);
+              rh.ray.dir_y = static_cast<float>(d.y);
+              rh.ray.dir_z = static_cast<float>(d.z);
+              rh.ray.tnear = 0.f;
+              rh.ray.tfar = kInf;
+              rh.ray.mask = ~0u;
+              rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+              rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+              rtcIntersect1(im.scene, &context, &rh);
+              if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+                set_miss(g, i);
+              else
+                store_hit(i, d, rh.hit.primID, rh.hit.u, rh.hit.v, rh.ray.tfar);
+            }
+          }
+          return;
+        }
+        // Packets of 4 x 4 pixels; lanes outside the image or the mesh's window stay
+        // invalid.
+        for (int by = r.rows().begin(); by < r.rows().end(); by += 4) {
+          for (int bx = r.cols().begin(); bx < r.cols().end(); bx += 4) {
+            alignas(64) int valid[16];
+            alignas(64) RTCRayHit16 rh;
+            Vec3d dirs[16];
+            bool any = false;
+            for (int k = 0; k < 16; ++k) {
+              const int x = bx + (k & 3), y = by + (k >> 2);
+              valid[k] = 0;
+              if (x >= r.cols().end() || y >= r.rows().end()) continue;
+              const Vec3d d = direction(x, y);
+              dirs[k] = d;
+              const std::size_t i = g.index(x, y);
+              put4(g.direction, i, d);
+              set_miss(g, i);
+              if (!window.contains(x, y)) continue;
+              valid[k] = -1;
+              any = true;
+              rh.ray.org_x[k] = ox;
+              rh.ray.org_y[k] = oy;
+              rh.ray.org_z[k] = oz;
+              rh.ray.dir_x[k] = static_cast<float>(d.x);
+              rh.ray.dir_y[k] = static_cast<float>(d.y);
+              rh.ray.dir_z[k] = static_cast<float>(d.z);
+              rh.ray.tnear[k] = 0.f;
+              rh.ray.tfar[k] = kInf;
+              rh.ray.mask[k] = ~0u;
+              rh.ray.time[k] = 0.f;
+              rh.ray.flags[k] = 0;
+              rh.ray.id[k] = static_cast<unsigned>(k);
+              rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+              rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+              rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+            }
+            if (!any) continue;
+            rtcIntersect16(valid, im.scene, &context, &rh);
+            for (int k = 0; k < 16; ++k) {
+              if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+              const int x = bx + (k & 3), y = by + (k >> 2);
+              store_hit(g.index(x, y), dirs[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k],
+                        rh.ray.tfar[k]);
+            }
+          }
+        }
+      },
+      // Fixed tiles: which pixels share a packet never depends on the threads.
+      tbb::simple_partitioner());
 }
 
 GBuffer render_gbuffer(const Mesh& mesh, const Camera& camera) {

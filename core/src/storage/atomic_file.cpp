@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -64,19 +65,51 @@ bool process_is_gone(long pid) {
 
 }  // namespace
 
-bool is_atomic_temporary_name(const std::string& filename, long* pid) {
+const std::string& atomic_temporary_host() {
+  static const std::string tag = [] {
+    std::array<char, 256> buf{};
+    std::string h = ::gethostname(buf.data(), buf.size() - 1) == 0 ? buf.data() : "";
+    for (char& c : h)
+      if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-'))
+        c = '_';
+    return h.empty() ? std::string("localhost") : h;
+  }();
+  return tag;
+}
+
+bool is_atomic_temporary_name(const std::string& filename, long* pid, std::string* host) {
   const auto at = filename.rfind(".tmp.");
   if (at == std::string::npos || at == 0) return false;
-  const char* p = filename.c_str() + at + 5;
-  const char* end = filename.c_str() + filename.size();
+  // "<host>.<pid>.<n>", or "<pid>.<n>" as versions before the host was named wrote.
+  const std::string rest = filename.substr(at + 5);
+  std::vector<std::string> parts;
+  for (std::size_t from = 0;;) {
+    const auto dot = rest.find('.', from);
+    parts.push_back(rest.substr(from, dot == std::string::npos ? std::string::npos : dot - from));
+    if (dot == std::string::npos) break;
+    from = dot + 1;
+  }
+  if (parts.size() != 2 && parts.size() != 3) return false;
+  const auto number = [](const std::string& t, auto* out) {
+    if (t.empty()) return false;
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), *out);
+    return r.ec == std::errc{} && r.ptr == t.data() + t.size();
+  };
   long parsed = 0;
-  auto r = std::from_chars(p, end, parsed);
-  if (r.ec != std::errc{} || r.ptr == p || r.ptr == end || *r.ptr != '.') return false;
   unsigned long long n = 0;
-  const char* q = r.ptr + 1;
-  auto r2 = std::from_chars(q, end, n);
-  if (r2.ec != std::errc{} || r2.ptr == q || r2.ptr != end) return false;
+  const std::size_t p = parts.size() - 2;
+  if (!number(parts[p], &parsed) || !number(parts[p + 1], &n)) return false;
+  std::string h;
+  if (parts.size() == 3) {
+    h = parts[0];
+    if (h.empty() || !std::all_of(h.begin(), h.end(), [](char c) {
+          return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                 c == '-' || c == '_';
+        }))
+      return false;
+  }
   if (pid) *pid = parsed;
+  if (host) *host = h;
   return true;
 }
 
@@ -87,7 +120,10 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& dir) {
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     long pid = 0;
-    if (!is_atomic_temporary_name(name, &pid)) continue;
+    std::string host;
+    if (!is_atomic_temporary_name(name, &pid, &host)) continue;
+    // Another node's process table is not ours: its temporaries are its own to sweep.
+    if (!host.empty() && host != atomic_temporary_host()) continue;
     if (!process_is_gone(pid)) continue;
     std::error_code rm;
     if (fs::remove(it->path(), rm)) {
@@ -147,7 +183,8 @@ void write_files_atomically(std::span<const PendingFile> files) {
       remove_stale_temporaries_once(f.path.has_parent_path() ? f.path.parent_path()
                                                              : fs::path("."));
       fs::path tmp = f.path;
-      tmp += fmt::format(".tmp.{}.{}", ::getpid(), counter.fetch_add(1));
+      tmp +=
+          fmt::format(".tmp.{}.{}.{}", atomic_temporary_host(), ::getpid(), counter.fetch_add(1));
       tmps.push_back(tmp);
       slots.push_back(claim_slot(tmp));
       f.write(tmp);

@@ -27,11 +27,18 @@ void write_files_atomically(std::span<const PendingFile> files);
 void write_bytes_atomically(const std::filesystem::path& path, std::span<const std::byte> bytes);
 void write_text_atomically(const std::filesystem::path& path, std::string_view text);
 
-/// True for a name "<anything>.tmp.<pid>.<n>" as write_file_atomically makes; sets *pid.
-bool is_atomic_temporary_name(const std::string& filename, long* pid = nullptr);
-/// Removes the temporaries in `dir` (not recursive) left by processes that no longer run on this
-/// machine. Returns how many it removed. The folder is assumed local: a process of the same pid
-/// on another host sharing it would look alive or dead by this host's process table.
+/// This machine's name as temporaries carry it: the host name with every character other than
+/// a letter, a digit or '-' replaced by '_'.
+const std::string& atomic_temporary_host();
+/// True for a name "<anything>.tmp.<host>.<pid>.<n>" as write_file_atomically makes (or
+/// "<anything>.tmp.<pid>.<n>", host empty, as older versions made); sets *pid and *host.
+bool is_atomic_temporary_name(const std::string& filename, long* pid = nullptr,
+                              std::string* host = nullptr);
+/// Removes the temporaries in `dir` (not recursive) left by processes of this host that no
+/// longer run. Returns how many it removed. A temporary named for another host is left alone
+/// whatever its pid: on a folder shared by the nodes of a cluster, this host's process table
+/// says nothing of another node's processes (an older name without a host counts as this
+/// host's).
 std::size_t remove_stale_temporaries(const std::filesystem::path& dir);
 /// remove_stale_temporaries(dir) the first time this process asks for `dir`, nothing after: a
 /// folder of thousands of cache entries is listed once, not on every write. Writes and the stage

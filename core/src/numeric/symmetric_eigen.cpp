@@ -1,0 +1,91 @@
+#include "prtlab/numeric/symmetric_eigen.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <mutex>
+#include <vector>
+
+#include "prtlab/base/error.h"
+
+#ifdef PRTLAB_HAVE_LAPACK
+extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, const int* n,
+                        double* a, const int* lda, const double* vl, const double* vu,
+                        const int* il, const int* iu, const double* abstol, int* m, double* w,
+                        double* z, const int* ldz, int* isuppz, double* work, const int* lwork,
+                        int* iwork, const int* liwork, int* info);
+#endif
+
+namespace prt {
+namespace {
+
+void check(const Eigen::MatrixXd& g, Eigen::Index k) {
+  if (g.rows() != g.cols())
+    throw ParameterError(
+        fmt::format("symmetric eigen-decomposition of a {} x {} matrix", g.rows(), g.cols()));
+  if (k < 0 || k > g.rows())
+    throw ParameterError(
+        fmt::format("{} eigenpairs asked of a {} x {} matrix", k, g.rows(), g.cols()));
+}
+
+}  // namespace
+
+SymmetricEigen top_symmetric_eigen_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
+  check(g, k);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
+  if (eig.info() != Eigen::Success)
+    throw Error(
+        fmt::format("the eigen-decomposition of a {} x {} symmetric matrix did not converge",
+                    g.rows(), g.cols()));
+  return {eig.eigenvalues().tail(k).reverse(), eig.eigenvectors().rightCols(k).rowwise().reverse()};
+}
+
+#ifdef PRTLAB_HAVE_LAPACK
+SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
+  check(g, k);
+  const auto n = static_cast<int>(g.rows());
+  if (n == 0 || k == 0) return {Eigen::VectorXd(0), Eigen::MatrixXd(g.rows(), 0)};
+  // The whole spectrum ('A'): for the sizes here dsyevr's MRRR is faster over all of it than
+  // over a subset ('I') past a few hundred vectors.
+  Eigen::MatrixXd a = g;
+  Eigen::VectorXd w(n);
+  Eigen::MatrixXd z(n, n);
+  std::vector<int> isuppz(static_cast<std::size_t>(2 * n));
+  int m = 0, info = 0, lwork = -1, liwork = -1, iwork_query = 0;
+  const int il = 1, iu = n;
+  const double vl = 0, vu = 0, abstol = 0;
+  double work_query = 0;
+  // Debian's serial OpenBLAS shares internal buffers between calls without locking them: two
+  // threads inside it at once corrupt each other's results. One call at a time.
+  static std::mutex serial;
+  const std::lock_guard lock(serial);
+  dsyevr_("V", "A", "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &n,
+          isuppz.data(), &work_query, &lwork, &iwork_query, &liwork, &info);
+  if (info != 0) throw Error(fmt::format("dsyevr's workspace query failed (info {})", info));
+  lwork = static_cast<int>(work_query);
+  liwork = iwork_query;
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  std::vector<int> iwork(static_cast<std::size_t>(liwork));
+  dsyevr_("V", "A", "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &n,
+          isuppz.data(), work.data(), &lwork, iwork.data(), &liwork, &info);
+  if (info != 0 || m != n)
+    throw Error(fmt::format(
+        "the eigen-decomposition of a {} x {} symmetric matrix did not converge (dsyevr info {})",
+        n, n, info));
+  return {w.tail(k).reverse(), z.rightCols(k).rowwise().reverse()};
+}
+
+const char* symmetric_eigen_backend() {
+  return "LAPACK dsyevr (OpenBLAS, serial)";
+}
+#else
+SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
+  return top_symmetric_eigen_eigen(g, k);
+}
+
+const char* symmetric_eigen_backend() {
+  return "Eigen SelfAdjointEigenSolver";
+}
+#endif
+
+}  // namespace prt
