@@ -10,6 +10,7 @@
 #     cache of its own that the ranks fill concurrently;
 #   - a killed distributed run resumes to the same points.csv;
 #   - node-local caches: the root measures the other ranks' points again, the same, and warns;
+#   - a point that fails on a rank is recorded, the run goes on and exits 1, as one process;
 #   - compress with bicluster's row groups over the ranks: the one-process result;
 #   - four processes writing the same stage into one cache at once leave a valid entry;
 #   - a command that does not spread over ranks is refused on 2 ranks.
@@ -80,6 +81,41 @@ grep -q "ranks-cache-not-shared" "$WORK/local.log" \
   || { cat "$WORK/local.log"; fail "no warning when the root recomputes the ranks' points"; }
 python3 "$HERE/compare_points.py" "$WORK/one/fig6-quick/points.csv" "$WORK/local/fig6-quick/points.csv" \
   || fail "node-local caches changed the points"
+
+# A point that fails (srbf_cta refuses 13 SRBFs when it compresses, after the file was accepted)
+# on whichever rank measures it: recorded as a failure, the other point measured, exit 1 with
+# the failure named, the same files as one process.
+cat > "$WORK/ranks-failing.toml" <<'TOML'
+name = "ranks-failing"
+title = "a point that fails on whichever rank measures it"
+kind = "sweep"
+scenes = ["tiny-sphere-plane"]
+backends = ["srbf_cta"]
+environments = ["courtyard"]
+images = false
+timing = false
+[[points.srbf_cta]]
+srbfs = 13
+[[points.srbf_cta]]
+srbfs = 12
+clusters = 2
+rank_light = 4
+rank_vertex = 2
+TOML
+for n in 1 2; do
+  launch=()
+  [[ $n -gt 1 ]] && launch=("$MPIEXEC" -n "$n")
+  if PRTLAB_CACHE="$WORK/cache-failing-$n" "${launch[@]}" "$PRTLAB" -q --no-opencl experiment run \
+      "$WORK/ranks-failing.toml" --out "$WORK/failing$n" --no-plot > "$WORK/failing$n.log" 2>&1; then
+    cat "$WORK/failing$n.log"; fail "a run with a failed point exited 0 ($n ranks)"
+  fi
+  grep -q "1 point failed, 1 measured" "$WORK/failing$n.log" \
+    || { cat "$WORK/failing$n.log"; fail "the failed point is not named ($n ranks)"; }
+done
+for f in points.csv result.json; do
+  python3 "$HERE/compare_points.py" "$WORK/failing1/ranks-failing/$f" "$WORK/failing2/ranks-failing/$f" \
+    || fail "a failed point on 2 ranks: $f differs from one process"
+done
 
 # A collective compression: bicluster's row groups spread over the ranks give the one-process
 # result (exact and lossy), other backends compute the same result on every rank.

@@ -223,16 +223,22 @@ TEST(ClusterUnfolding, SubspaceIterationFindsTheTruncatedSvdInBothRepresentation
   }
 }
 
+// A CTA of a small random tensor whose clusters still take the subspace iteration.
+CtaOptions small_cta(int clusters, int rank_light, int rank_vertex, int iterations) {
+  CtaOptions o;
+  o.clusters = clusters;
+  o.rank_light = rank_light;
+  o.rank_vertex = rank_vertex;
+  o.clustering_iterations = iterations;
+  o.elbg_dims = 16;
+  return o;
+}
+
 TEST(ClusteredTensor, SameModelOnOneAndOnTwoThreads) {
   // Clusters large enough for the subspace iteration; every reduction is over fixed blocks, so
   // the thread count must not move a bit of the model.
   const Tensor t = random_tensor(500, 6, 40, 23);
-  CtaOptions o;
-  o.clusters = 3;
-  o.rank_light = 12;
-  o.rank_vertex = 6;
-  o.clustering_iterations = 3;
-  o.elbg_dims = 16;
+  const CtaOptions o = small_cta(3, 12, 6, 3);
   CtaModel one, two;
   tbb::task_arena(1).execute([&] { one = clustered_tensor_approximation(t.view_of(), o); });
   tbb::task_arena(2).execute([&] { two = clustered_tensor_approximation(t.view_of(), o); });
@@ -245,12 +251,7 @@ TEST(ClusteredTensor, ResumedRunEndsWithTheUninterruptedModel) {
   // The checkpoint after the first clustering iteration, through an archive and back, then run
   // to the end: the same model as the run that was never stopped.
   const Tensor t = random_tensor(300, 6, 30, 29);
-  CtaOptions o;
-  o.clusters = 4;
-  o.rank_light = 10;
-  o.rank_vertex = 5;
-  o.clustering_iterations = 4;
-  o.elbg_dims = 16;
+  CtaOptions o = small_cta(4, 10, 5, 4);
   std::vector<std::vector<std::byte>> saved;
   std::vector<int> iterations;
   o.on_checkpoint = [&](const CtaCheckpoint& c) {
