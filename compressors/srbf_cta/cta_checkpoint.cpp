@@ -24,8 +24,12 @@ void put_matrix(ArchiveWriter& w, nlohmann::json& shapes, const std::string& nam
 
 template <class M>
 M get_matrix(const ArchiveReader& r, const std::string& name) {
-  const nlohmann::json& shapes = r.meta().at("shapes");
-  if (!shapes.contains(name) || !shapes[name].is_array() || shapes[name].size() != 2)
+  const auto it = r.meta().find("shapes");
+  if (it == r.meta().end() || !it->is_object())
+    throw InputError(r.path(), "checkpoint: metadata 'shapes' missing or not an object");
+  const nlohmann::json& shapes = *it;
+  if (!shapes.contains(name) || !shapes[name].is_array() || shapes[name].size() != 2 ||
+      !shapes[name][0].is_number_integer() || !shapes[name][1].is_number_integer())
     throw InputError(r.path(), "checkpoint: no shape for section '" + name + "'");
   const auto rows = shapes[name][0].get<std::int64_t>(), cols = shapes[name][1].get<std::int64_t>();
   if (rows < 0 || cols < 0) throw InputError(r.path(), "checkpoint: negative shape of " + name);

@@ -273,6 +273,11 @@ TEST(ClusteredTensor, ResumedRunEndsWithTheUninterruptedModel) {
     EXPECT_EQ(resumed.clustering_iterations, whole.clustering_iterations);
     EXPECT_EQ((resumed.weights - whole.weights).cwiseAbs().maxCoeff(), 0.0);
   }
+  // A checkpoint archive without its shapes is an InputError naming it, never a crash.
+  ArchiveWriter broken("srbf_cta-checkpoint", 1);
+  broken.add_meta("view", 6);
+  const std::vector<std::byte> bytes = broken.to_bytes();
+  EXPECT_THROW(load_cta_checkpoint(ArchiveReader::from_bytes(bytes, "broken.prt")), InputError);
   // A checkpoint of other ranks is refused, never silently used.
   const CtaCheckpoint c = load_cta_checkpoint(ArchiveReader::from_bytes(saved[0], "c.prt"));
   CtaOptions other = o;
