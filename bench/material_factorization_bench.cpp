@@ -6,7 +6,9 @@
 //
 //   material/<backend>/<label>   counters: ms_per_abrdf_channel, texels; labels: cmf paper-chain
 //        (halfway = mean, no refinement, no scale refit), svd, project (no refinement),
-//        defaults; hf paper (no scale refit), defaults. Float factors, no clustering.
+//        defaults; hf paper (no scale refit), defaults (float factors, no clustering); svd abrdf
+//        (rank 4 per texel) and texel_pca (rank 8 over the texels' Gram matrix, the one of
+//        these that solves a dense eigenproblem: numeric/symmetric_eigen.h).
 //
 //   build/release/bench/material_factorization_bench
 // PRTLAB_BENCH_TEXELS (default 256, a square) sets the texel count; the per-BTF set-up (the
@@ -76,7 +78,9 @@ const int registered = [] {
            {"cmf", fp({{"halfway", "project"}, {"refine", "0"}}), "project"},
            {"cmf", fp({}), "defaults"},
            {"hf", fp({{"refit_scale", "false"}}), "paper"},
-           {"hf", fp({}), "defaults"}})
+           {"hf", fp({}), "defaults"},
+           {"svd", Params{{"rank", "4"}}, "abrdf"},
+           {"svd", Params{{"mode", "texel_pca"}, {"rank", "8"}}, "texel_pca"}})
     benchmark::RegisterBenchmark(("material/" + backend + "/" + label).c_str(), compress, backend,
                                  params)
         ->Unit(benchmark::kMillisecond)

@@ -286,6 +286,10 @@ void register_benchmarks() {
       "gbuffer/packets", [](benchmark::State& s) { BM_gbuffer(s, prt::PrimaryRays::kPackets); })
       ->Unit(benchmark::kMillisecond)
       ->UseRealTime();
+  benchmark::RegisterBenchmark(
+      "gbuffer/raster", [](benchmark::State& s) { BM_gbuffer(s, prt::PrimaryRays::kRaster); })
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
   benchmark::RegisterBenchmark("gbuffer/upload", BM_gbuffer_upload)
       ->Unit(benchmark::kMillisecond)
       ->UseRealTime();

@@ -5,22 +5,25 @@
 # cache; a table of compress seconds, C++ and OpenCL relight milliseconds and the error, A
 # against B.
 #   scripts/arch_ab.sh A_PRTLAB B_PRTLAB [OUT_DIR] [A_NAME] [B_NAME]
-# Default OUT_DIR results/bench/arch-ab, names "portable" and "native".
+# Default OUT_DIR results/bench/arch-ab, names "portable" and "native". A_ENV / B_ENV: settings
+# (VAR=value ...) in the environment of A's / B's run only, so that one binary against itself
+# measures a run-time switch (scripts/lapack_ab.sh: PRTLAB_EIGEN_SOLVER=eigen).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 A="$1" B="$2" OUT="${3:-results/bench/arch-ab}" NA="${4:-portable}" NB="${5:-native}"
 mkdir -p "$OUT"
 for who in a b; do
-  bin="$A" name="$NA"
-  [[ $who == b ]] && bin="$B" name="$NB"
+  bin="$A" name="$NA" settings="${A_ENV:-}"
+  [[ $who == b ]] && bin="$B" name="$NB" settings="${B_ENV:-}"
   cache="$(mktemp -d)"
-  PRTLAB_CACHE="$cache" "$bin" -q experiment run fig6 --quick --out "$OUT/$name" --force --no-plot \
+  # shellcheck disable=SC2086
+  env $settings PRTLAB_CACHE="$cache" "$bin" -q experiment run fig6 --quick --out "$OUT/$name" --force --no-plot \
     > "$OUT/$name.log" 2>&1 || { tail -20 "$OUT/$name.log"; exit 1; }
   rm -rf "$cache"
   echo "$name: done"
 done
 python3 - "$OUT" "$NA" "$NB" "$*" <<'PY'
-import csv, subprocess, sys, datetime
+import csv, os, subprocess, sys, datetime
 out, na, nb, argv = sys.argv[1:5]
 def load(name):
     rows = [r for r in csv.DictReader(l for l in open(f"{out}/{name}/fig6-quick/points.csv") if not l.startswith("#"))]
@@ -33,7 +36,8 @@ def f(x):
     except (TypeError, ValueError): return float("nan")
 with open(f"{out}/ab.md", "w") as o:
     o.write(f"# {na} against {nb}: every backend's compression and relight, one run\n\n")
-    o.write(f"- command: `scripts/arch_ab.sh {argv}`; git {git}; {cpu}; {datetime.datetime.utcnow().isoformat(timespec='seconds')}Z\n")
+    envs = " ".join(f"{k}='{v}'" for k, v in (("A_ENV", os.environ.get("A_ENV", "")), ("B_ENV", os.environ.get("B_ENV", ""))) if v)
+    o.write(f"- command: `{envs + ' ' if envs else ''}scripts/arch_ab.sh {argv}`; git {git}; {cpu}; {datetime.datetime.utcnow().isoformat(timespec='seconds')}Z\n")
     o.write(f"- each build ran `prtlab experiment run fig6 --quick` from an empty stage cache; {na} first\n\n")
     o.write(f"| backend | compress s {na} | {nb} | ratio | relight C++ ms {na} | {nb} | ratio | relight OpenCL ms {na} | {nb} | frobenius_rel {na} | {nb} |\n|---|---|---|---|---|---|---|---|---|---|---|\n")
     for k in a:

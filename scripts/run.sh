@@ -11,7 +11,7 @@ mkdir -p build
 if command -v ccache >/dev/null 2>&1 && [[ -z "${PRTLAB_COMPILER_LAUNCHER:-}" ]]; then
   export PRTLAB_COMPILER_LAUNCHER=ccache
 fi
-cmake --preset release -DPRTLAB_ARCH="${PRTLAB_ARCH:-portable}" > build/configure-release.log 2>&1 || { cat build/configure-release.log; exit 1; }
+cmake --preset release -DPRTLAB_ARCH="${PRTLAB_ARCH:-native}" > build/configure-release.log 2>&1 || { cat build/configure-release.log; exit 1; }
 cmake --build --preset release -j "$JOBS" --target prtlab
 
 PRTLAB=build/release/cli/prtlab

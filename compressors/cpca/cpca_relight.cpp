@@ -48,10 +48,13 @@ std::vector<Rgb> representative_dots(const CpcaArrays& a, std::span<const Rgb> l
   std::vector<Rgb> out(a.rep_count());
   tbb::parallel_for(std::size_t{0}, a.rep_count(), [&](std::size_t r) {
     const float* rep = a.reps.data() + r * n;
+    // Lane-inner: the 64 lanes' chains side by side, each lane still summed in j order.
     Float4 lanes[kLanes] = {};
-    for (std::size_t lane = 0; lane < kLanes; ++lane) {
-      for (std::size_t j = lane; j < n; j += kLanes) lanes[lane] += rep[j] * l[j];
-    }
+    std::size_t j0 = 0;
+    for (; j0 + kLanes <= n; j0 += kLanes)
+      for (std::size_t lane = 0; lane < kLanes; ++lane)
+        lanes[lane] += rep[j0 + lane] * l[j0 + lane];
+    for (std::size_t lane = 0; j0 + lane < n; ++lane) lanes[lane] += rep[j0 + lane] * l[j0 + lane];
     for (std::size_t s = kLanes / 2; s > 0; s /= 2) {
       for (std::size_t lane = 0; lane < s; ++lane) lanes[lane] += lanes[lane + s];
     }

@@ -5,6 +5,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 #include "cpca_sh/cpca_sh.h"
 
 namespace prt::cpca_sh {
@@ -22,8 +24,11 @@ std::vector<Float4> as_float4(std::span<const Rgb> q) {
   return out;
 }
 
-// Writes the rows coefficients of vertex p.
+// Writes the rows coefficients of vertex p. The rows go in tiles of kTile accumulators side by
+// side, each summed over j in vector order as the kernel sums it: one accumulator would be one
+// chain of dependent multiply-adds (with FMA contraction, a chain of the FMA's longer latency).
 struct Blend {
+  static constexpr std::size_t kTile = 8;
   const CpcaShArrays& a;
   const std::vector<Float4>& q;
 
@@ -33,12 +38,20 @@ struct Blend {
     const std::uint32_t f = a.first[c];
     const std::uint32_t k = a.first[c + 1] - f - 1;
     const float* w = a.weight_values.data() + a.weight_offsets[p];
-    for (std::size_t i = 0; i < rows; ++i) {
-      Float4 acc{};
-      for (std::uint32_t j = 0; j < k; ++j) acc += w[j] * q[(f + 1 + j) * rows + i];
-      const Float4 mean = q[f * rows + i];
-      const Float4 s = a.format == WeightFormat::kS8 ? mean + a.vertex_scales[p] * acc : mean + acc;
-      out[p * rows + i] = Rgb(s[0], s[1], s[2]);
+    const bool scaled = a.format == WeightFormat::kS8;
+    for (std::size_t i0 = 0; i0 < rows; i0 += kTile) {
+      const std::size_t n = std::min(kTile, rows - i0);
+      Float4 acc[kTile] = {};
+      for (std::uint32_t j = 0; j < k; ++j) {
+        const Float4* qj = q.data() + (f + 1 + j) * rows + i0;
+        const float wj = w[j];
+        for (std::size_t t = 0; t < n; ++t) acc[t] += wj * qj[t];
+      }
+      const Float4* mean = q.data() + f * rows + i0;
+      for (std::size_t t = 0; t < n; ++t) {
+        const Float4 s = scaled ? mean[t] + a.vertex_scales[p] * acc[t] : mean[t] + acc[t];
+        out[p * rows + i0 + t] = Rgb(s[0], s[1], s[2]);
+      }
     }
   }
 };
@@ -50,12 +63,26 @@ std::vector<Rgb> representative_products(const CpcaShArrays& a, std::span<const 
   const auto rows = static_cast<std::size_t>(a.rows());
   std::vector<Float4> l(n);
   for (std::size_t k = 0; k < n; ++k) l[k] = to_float4(light[k]);
+  // kTile products side by side, each summed over k in increasing order as the kernel sums
+  // it, so the multiply-adds of one are not a single dependent chain.
+  constexpr std::size_t kTile = 4;
   std::vector<Rgb> out(a.rep_count() * rows);
-  tbb::parallel_for(std::size_t{0}, out.size(), [&](std::size_t g) {
-    const float* m = a.reps.data() + g * n;  // rep g / rows, row g % rows
-    Float4 acc{};
-    for (std::size_t k = 0; k < n; ++k) acc += m[k] * l[k];
-    out[g] = Rgb(acc[0], acc[1], acc[2]);
+  const std::size_t tiles = (out.size() + kTile - 1) / kTile;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 16), [&](const auto& range) {
+    for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
+      const std::size_t g0 = tile * kTile;
+      const std::size_t count = std::min(kTile, out.size() - g0);
+      const float* m = a.reps.data() + g0 * n;  // rep g / rows, row g % rows
+      Float4 acc[kTile] = {};
+      if (count == kTile) {
+        for (std::size_t k = 0; k < n; ++k)
+          for (std::size_t t = 0; t < kTile; ++t) acc[t] += m[t * n + k] * l[k];
+      } else {
+        for (std::size_t k = 0; k < n; ++k)
+          for (std::size_t t = 0; t < count; ++t) acc[t] += m[t * n + k] * l[k];
+      }
+      for (std::size_t t = 0; t < count; ++t) out[g0 + t] = Rgb(acc[t][0], acc[t][1], acc[t][2]);
+    }
   });
   return out;
 }

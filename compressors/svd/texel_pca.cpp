@@ -3,11 +3,11 @@
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
 #include "prtlab/base/error.h"
+#include "prtlab/numeric/symmetric_eigen.h"
 
 namespace prt::svd {
 
@@ -36,21 +36,25 @@ SvdState texel_pca(const Btf& btf, int rank) {
   Eigen::MatrixXd gram(n, n);
   gram.setZero();
   gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram.selfadjointView<Eigen::Lower>());
-  if (eig.info() != Eigen::Success)
-    throw Error(fmt::format(
-        "material svd: the texel Gram eigensolver did not converge for BTF '{}'", btf.material()));
-  // Ascending eigenvalues: the K leading are the last K.
-  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  // numeric/symmetric_eigen.h (LAPACK where the build has it). A small rank asks for its top
+  // eigenpairs only and discards the trace less what they keep (exact but for a few ulps of the
+  // trace); a large one, which may discard next to nothing, asks for the whole spectrum and sums
+  // the small eigenvalues themselves.
+  const bool whole = 8 * static_cast<Eigen::Index>(rank) > n;
+  const SymmetricEigen eig = top_symmetric_eigen(gram, whole ? n : rank);
   double discarded = 0;
-  for (Eigen::Index i = 0; i < n - rank; ++i) discarded += std::max(lambda[i], 0.0);
+  if (whole) {
+    for (Eigen::Index i = rank; i < n; ++i) discarded += std::max(eig.values[i], 0.0);
+  } else {
+    discarded = std::max(0.0, gram.diagonal().sum() - eig.values.cwiseMax(0.0).sum());
+  }
 
   // Principal directions from the Gram eigenvectors, orthonormalised in order so that the
   // coefficients below are orthogonal projections (a direction of a zero eigenvalue that
   // Gram-Schmidt leaves with no new part is dropped: it adds nothing to the span).
   Eigen::MatrixXd dirs(d, rank);
   for (int r = 0; r < rank; ++r) {
-    Eigen::VectorXd a = x.transpose() * eig.eigenvectors().col(n - 1 - r);
+    Eigen::VectorXd a = x.transpose() * eig.vectors.col(r);
     const double first = a.norm();
     for (int q = 0; q < r; ++q) a -= dirs.col(q).dot(a) * dirs.col(q);
     const double left = a.norm();

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
+#include <cstdlib>
+#include <cstring>
 #include <mutex>
 #include <vector>
 
@@ -28,6 +30,18 @@ void check(const Eigen::MatrixXd& g, Eigen::Index k) {
         fmt::format("{} eigenpairs asked of a {} x {} matrix", k, g.rows(), g.cols()));
 }
 
+#ifdef PRTLAB_HAVE_LAPACK
+// PRTLAB_EIGEN_SOLVER=eigen runs Eigen's solver in a build with LAPACK, so one binary measures
+// the two against each other in one run (scripts/arch_ab.sh, results/bench/lapack-ab/).
+bool eigen_forced() {
+  static const bool forced = [] {
+    const char* v = std::getenv("PRTLAB_EIGEN_SOLVER");
+    return v != nullptr && std::strcmp(v, "eigen") == 0;
+  }();
+  return forced;
+}
+#endif
+
 }  // namespace
 
 SymmetricEigen top_symmetric_eigen_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
@@ -42,41 +56,47 @@ SymmetricEigen top_symmetric_eigen_eigen(const Eigen::MatrixXd& g, Eigen::Index 
 
 #ifdef PRTLAB_HAVE_LAPACK
 SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
+  if (eigen_forced()) return top_symmetric_eigen_eigen(g, k);
   check(g, k);
   const auto n = static_cast<int>(g.rows());
   if (n == 0 || k == 0) return {Eigen::VectorXd(0), Eigen::MatrixXd(g.rows(), 0)};
-  // The whole spectrum ('A'): for the sizes here dsyevr's MRRR is faster over all of it than
-  // over a subset ('I') past a few hundred vectors.
+  // The top k only ('I') when they are a small part of the spectrum; past that dsyevr's MRRR is
+  // as fast over all of it ('A'), which the light Gram matrices of srbf_cta (134 of 642) showed.
+  const bool subset = 8 * k <= n;
+  const char* range = subset ? "I" : "A";
+  const int cols = subset ? static_cast<int>(k) : n;
   Eigen::MatrixXd a = g;
   Eigen::VectorXd w(n);
-  Eigen::MatrixXd z(n, n);
+  Eigen::MatrixXd z(n, cols);
   std::vector<int> isuppz(static_cast<std::size_t>(2 * n));
   int m = 0, info = 0, lwork = -1, liwork = -1, iwork_query = 0;
-  const int il = 1, iu = n;
+  const int il = subset ? n - cols + 1 : 1, iu = n;
   const double vl = 0, vu = 0, abstol = 0;
   double work_query = 0;
   // Debian's serial OpenBLAS shares internal buffers between calls without locking them: two
   // threads inside it at once corrupt each other's results. One call at a time.
   static std::mutex serial;
   const std::lock_guard lock(serial);
-  dsyevr_("V", "A", "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &n,
-          isuppz.data(), &work_query, &lwork, &iwork_query, &liwork, &info);
+  dsyevr_("V", range, "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(),
+          &n, isuppz.data(), &work_query, &lwork, &iwork_query, &liwork, &info);
   if (info != 0) throw Error(fmt::format("dsyevr's workspace query failed (info {})", info));
   lwork = static_cast<int>(work_query);
   liwork = iwork_query;
   std::vector<double> work(static_cast<std::size_t>(lwork));
   std::vector<int> iwork(static_cast<std::size_t>(liwork));
-  dsyevr_("V", "A", "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &n,
-          isuppz.data(), work.data(), &lwork, iwork.data(), &liwork, &info);
-  if (info != 0 || m != n)
+  dsyevr_("V", range, "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(),
+          &n, isuppz.data(), work.data(), &lwork, iwork.data(), &liwork, &info);
+  if (info != 0 || m != cols)
     throw Error(fmt::format(
         "the eigen-decomposition of a {} x {} symmetric matrix did not converge (dsyevr info {})",
         n, n, info));
-  return {w.tail(k).reverse(), z.rightCols(k).rowwise().reverse()};
+  // Ascending either way: the k largest are the last k of the m found.
+  return {w.segment(m - k, k).reverse(), z.rightCols(k).rowwise().reverse()};
 }
 
 const char* symmetric_eigen_backend() {
-  return "LAPACK dsyevr (OpenBLAS, serial)";
+  return eigen_forced() ? "Eigen SelfAdjointEigenSolver (PRTLAB_EIGEN_SOLVER=eigen)"
+                        : "LAPACK dsyevr (OpenBLAS, serial)";
 }
 #else
 SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {

@@ -18,6 +18,7 @@
 #include "numeric/row_access.h"
 #include "prtlab/base/error.h"
 #include "prtlab/numeric/row_products.h"
+#include "prtlab/numeric/symmetric_eigen.h"
 
 namespace prt {
 
@@ -177,12 +178,9 @@ void gram_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k, TruncatedP
       for (Eigen::Index j = i + 1; j < m; ++j) g(i, j) = g(j, i);
     }
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
-  if (eig.info() != Eigen::Success) {
-    throw Error("truncated_pca: the eigen-decomposition of the Gram matrix did not converge");
-  }
   const Eigen::Index have = std::min(k, m);
-  const double top = std::max(0.0, eig.eigenvalues()[m - 1]);
+  const SymmetricEigen eig = top_symmetric_eigen(g, have);
+  const double top = have > 0 ? std::max(0.0, eig.values[0]) : 0.0;
   // An eigenvalue this small carries no direction that survives rounding; its component comes
   // from the completion instead.
   const double floor = top * static_cast<double>(m) * std::numeric_limits<double>::epsilon();
@@ -190,9 +188,9 @@ void gram_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k, TruncatedP
   out.eigenvalues = Eigen::VectorXd::Zero(k);
   Eigen::Index valid = 0;
   for (Eigen::Index j = 0; j < have; ++j) {
-    const double lambda = eig.eigenvalues()[m - 1 - j];
+    const double lambda = eig.values[j];
     if (!(lambda > floor)) break;
-    const Eigen::VectorXd v = eig.eigenvectors().col(m - 1 - j);
+    const Eigen::VectorXd v = eig.vectors.col(j);
     Eigen::VectorXd u;
     if constexpr (IsDense<A>::value) {
       u = centred.transpose() * v;

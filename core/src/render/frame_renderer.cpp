@@ -30,7 +30,7 @@ struct FrameRenderer::Impl {
   ClContext* context = nullptr;
   ShadingOptions options;
   GBufferTracer tracer;
-  PrimaryRays primary_rays = PrimaryRays::kPackets;
+  PrimaryRays primary_rays = PrimaryRays::kRaster;
   std::unique_ptr<DeviceRelighter> relighter;
   std::optional<DeviceBtfShader> shader;
   // How L* reaches the materials (shading_light_path). kToPixelBins: a backend relighting into

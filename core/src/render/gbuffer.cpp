@@ -11,9 +11,11 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "geometry/embree_triangle_scene.h"
 #include "prtlab/base/error.h"
+#include "render/primary_raster.h"
 
 namespace prt {
 namespace {
@@ -52,6 +54,7 @@ void GBuffer::reset(int w, int h) {
 struct GBufferTracer::Impl {
   std::optional<EmbreeTriangleScene> embree;
   RTCScene scene = nullptr;  // embree->scene()
+  std::vector<Vec3> positions;
   std::vector<std::uint32_t> indices;
   std::vector<std::uint16_t> triangle_part;
   std::vector<Vec2> uvs;
@@ -64,6 +67,7 @@ GBufferTracer::GBufferTracer(const Mesh& input) : impl_(std::make_unique<Impl>()
   Mesh completed;
   const Mesh* mesh = &mesh_with_frames(input, completed);
   Impl& im = *impl_;
+  im.positions = mesh->positions;
   im.indices = mesh->indices;
   im.triangle_part = mesh->triangle_part;
   if (mesh->has_uvs()) {
@@ -161,10 +165,19 @@ void GBufferTracer::trace(const Camera& camera, GBuffer& g, PrimaryRays rays) co
               oz = static_cast<float>(camera.eye.z);
   const PixelWindow window = mesh_window(im.bounds, camera, basis, sx_scale, sy_scale);
 
+  // The image-plane offsets of every column and row, computed once a frame rather than twice a
+  // pixel (the same expressions, so the same directions).
+  thread_local std::vector<double> column_sx, row_sy;
+  std::vector<double>& sx_of = column_sx;
+  std::vector<double>& sy_of = row_sy;
+  sx_of.resize(static_cast<std::size_t>(camera.width));
+  sy_of.resize(static_cast<std::size_t>(camera.height));
+  for (int x = 0; x < camera.width; ++x)
+    sx_of[x] = (2.0 * (x + 0.5) / camera.width - 1.0) * sx_scale;
+  for (int y = 0; y < camera.height; ++y)
+    sy_of[y] = (1.0 - 2.0 * (y + 0.5) / camera.height) * sy_scale;
   const auto direction = [&](int x, int y) {
-    const double sy = (1.0 - 2.0 * (y + 0.5) / camera.height) * sy_scale;
-    const double sx = (2.0 * (x + 0.5) / camera.width - 1.0) * sx_scale;
-    return glm::normalize(basis.forward + sx * basis.right + sy * basis.up);
+    return glm::normalize(basis.forward + sx_of[x] * basis.right + sy_of[y] * basis.up);
   };
   // The hit's fields from Embree's (primID, u, v, t); ray direction d.
   const auto store_hit = [&](std::size_t i, const Vec3d& d, std::uint32_t tri, float u, float v,
@@ -195,11 +208,50 @@ void GBufferTracer::trace(const Camera& camera, GBuffer& g, PrimaryRays rays) co
       n /= nl;
     }
     const Vec3d t_sum = b0 * im.frame_t[vi[0]] + b1 * im.frame_t[vi[1]] + b2 * im.frame_t[vi[2]];
-    const LocalFrame f = LocalFrame::from_normal_tangent(n, t_sum);
+    // LocalFrame::from_normal_tangent for the unit n here, without its normal-only frame
+    // unless the tangent degenerates.
+    Vec3d tangent = t_sum - n * glm::dot(n, t_sum);
+    tangent -= n * glm::dot(n, tangent);
+    const double tl = glm::length(tangent);
+    LocalFrame f;
+    if (tl > 1e-8 * glm::length(t_sum) && std::isfinite(tl)) {
+      f.n = n;
+      f.t = tangent / tl;
+      f.b = glm::cross(n, f.t);
+    } else {
+      f = LocalFrame::from_normal(n);
+    }
     put4(g.normal, i, f.n);
     put4(g.view_local, i, f.to_local(-d));
   };
 
+  if (rays == PrimaryRays::kRaster) {
+    // Scratch reused between frames; trace() is const and may run on several threads.
+    thread_local PrimaryHits scratch;
+    PrimaryHits& hits = scratch;  // the lambda's workers must see this thread's scratch
+    if (rasterize_primary(im.positions, im.indices, camera, basis, hits)) {
+      tbb::parallel_for(
+          tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
+          [&](const tbb::blocked_range2d<int>& r) {
+            for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
+              for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+                const Vec3d d = direction(x, y);
+                const std::size_t i = g.index(x, y);
+                put4(g.direction, i, d);
+                const std::int32_t tri = hits.triangle[i];
+                if (tri < 0)
+                  set_miss(g, i);
+                else
+                  store_hit(i, d, static_cast<std::uint32_t>(tri), hits.b1[i], hits.b2[i],
+                            hits.t[i]);
+              }
+            }
+          },
+          tbb::simple_partitioner());
+      return;
+    }
+    rays = PrimaryRays::kPackets;
+  }
   tbb::parallel_for(
       tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
       [&](const tbb::blocked_range2d<int>& r) {

@@ -5,7 +5,8 @@
 // than Eigen's SelfAdjointEigenSolver on the 642 x 642 light Gram matrices of srbf_cta. Without,
 // Eigen's solver. Either way the result is the same on any number of threads: the serial
 // OpenBLAS never starts threads of its own (a threaded one inside TBB's tasks would also
-// oversubscribe the cores).
+// oversubscribe the cores). PRTLAB_EIGEN_SOLVER=eigen in the environment selects Eigen's solver
+// in a build with LAPACK (for measuring one against the other).
 #include <Eigen/Core>
 
 namespace prt {

@@ -109,7 +109,8 @@ class FrameRenderer {
   /// The backend's light_params (light_options.h) for every later light change (validated:
   /// ParameterError listing them). Does not relight by itself.
   void set_light_options(const std::map<std::string, std::string>& options);
-  /// How set_camera traces the G-buffer (packets by default; kSingle is the reference path).
+  /// How set_camera finds what each pixel sees (rasterised by default, packets when a vertex
+  /// lies at or behind the eye's plane; kSingle is the reference path).
   void set_primary_rays(PrimaryRays rays);
   /// Culling on (the default) or off. Off, every light change relights every vertex; either
   /// way a view change relights the visible vertices the current light has not reached, so L*

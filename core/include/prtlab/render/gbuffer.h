@@ -63,14 +63,19 @@ struct GBuffer {
   void reset(int width, int height);
 };
 
-/// How GBufferTracer shoots its primary rays (docs/rendering.md "G-buffer"). Both give the same
-/// G-buffer (tests/core/gbuffer_test.cpp compares them).
+/// How GBufferTracer finds what each pixel sees (docs/rendering.md "G-buffer"). All give the
+/// same G-buffer, to rounding (tests/core/gbuffer_test.cpp compares them).
 enum class PrimaryRays {
   /// Embree 16-wide packets of 4 x 4 pixels with coherent flags; only pixels inside the
   /// projection of the mesh's bounding box are traced (the others are known misses).
   kPackets,
   /// One rtcIntersect1 per pixel, every pixel: the reference.
   kSingle,
+  /// The mesh's triangles rasterised (perspective-correct barycentrics, nearest along the ray),
+  /// so the cost follows the triangles and the pixels they cover; the same triangle as a ray
+  /// at every pixel centre not within rounding of an edge. Traces packets instead when a
+  /// vertex lies at or behind the eye's plane.
+  kRaster,
 };
 
 /// Primary-ray tracer of a mesh: builds the Embree BVH and the per-vertex frames once, then
