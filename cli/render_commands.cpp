@@ -21,6 +21,7 @@
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/material_registry.h"
 #include "prtlab/lighting/environment_map.h"
+#include "prtlab/render/frame_cost_model.h"
 #include "prtlab/render/frame_renderer.h"
 #include "prtlab/storage/atomic_file.h"
 #include "prtlab/storage/data_paths.h"
@@ -419,150 +420,6 @@ std::string fmt_ms(double v) {
   return fmt::format("{:.2f}", v);
 }
 
-// ---- per-stage cost model ----------------------------------------------------------------------
-//
-// What each stage of a frame moves and computes, from the counts the frame loop knows (docs/
-// rendering.md "Cost model"): a stage on a device of read/write bandwidth B, arithmetic rate F
-// and host link H takes about max(bytes / B, flops / F) (device stages) or bytes / H (uploads).
-// The G-buffer is traced on the host here; on a GPU it would be rasterised (the paper's way),
-// modelled as writing its per-pixel fields once.
-struct StageCost {
-  std::string stage;
-  double bytes = 0;  ///< device memory traffic (or, for uploads, bytes over the host link)
-  double flops = 0;
-  bool upload = false;
-  double measured_ms = 0;  ///< this run's median (0: not separately measured)
-};
-
-struct DeviceProfile {
-  std::string name;
-  double gbps = 0, gflops = 0, link_gbps = 0;
-};
-
-// Nominal peak figures (vendor data sheets): the paper's GPU and the one prtlab's device
-// machines carry.
-const std::vector<DeviceProfile>& model_devices() {
-  static const std::vector<DeviceProfile> d = {
-      {"GTX 280 (the paper's, 2008)", 141.7, 933.0, 6.0},
-      {"H200 (SXM)", 4800.0, 67000.0, 50.0},
-  };
-  return d;
-}
-
-double model_ms(const StageCost& c, const DeviceProfile& d) {
-  if (c.upload) return c.bytes / (d.link_gbps * 1e6);
-  return std::max(c.bytes / (d.gbps * 1e6), c.flops / (d.gflops * 1e6));
-}
-
-struct StageCosts {
-  std::vector<StageCost> view, light;
-};
-
-// The stages of a view change and of a light change. m: values of the materials' light basis
-// per vertex (L*) and per reflectance vector.
-StageCosts frame_stage_costs(const FrameRenderer& r, const FrameCosts& costs,
-                             const LoopResult& view, const LoopResult& light, double m) {
-  StageCosts out;
-  const DeviceBtfShader* shader = r.device_shader();
-  const GBuffer& g = r.gbuffer();
-  const double pixels = static_cast<double>(g.pixel_count());
-  const double hits = static_cast<double>(g.hit_count());
-  // G-buffer: the fields shading reads (triangle, part, barycentrics, UV, view: 40 bytes a hit)
-  // plus the miss code of every pixel, written once.
-  out.view.push_back({"G-buffer", hits * 40.0 + pixels * 4.0, 0.0, false, view.stages.gbuffer_ms});
-  out.view.push_back(
-      {"G-buffer upload", hits * 44.0 + pixels * 4.0, 0.0, true, view.stages.gbuffer_upload_ms});
-  if (shader) {
-    const auto b = shader->bytes_per_pass();
-    // The view cache pass also reads 3 vertices' L* and writes the hit pixels.
-    const double lstar = 3.0 * m * 12.0 * hits;
-    out.view.push_back(
-        {"view cache + shade hits", static_cast<double>(b.view_cache) + lstar + hits * 12,
-         3.0 * costs.material_flops_per_pixel * hits, false, view.stages.view_cache_kernel_ms});
-    out.view.push_back({"misses (background)", (pixels - hits) * 16.0 + pixels * 4.0, 0.0, false,
-                        view.stages.shade_kernel_ms - view.stages.view_cache_kernel_ms});
-  }
-  const double culled = r.culls() ? static_cast<double>(r.visible_vertices().size()) /
-                                        static_cast<double>(r.mesh().positions.size())
-                                  : 1.0;
-  // The relight reads its stored state once (the share of the visible vertices when culled),
-  // the light vector, and writes L*.
-  out.light.push_back({"relight",
-                       static_cast<double>(costs.transfer_bytes) * culled +
-                           static_cast<double>(r.mesh().positions.size()) * culled * m * 12.0,
-                       costs.transfer_flops * culled, false, light.stages.relight_kernel_ms});
-  if (shader) {
-    out.light.push_back({"cached shade",
-                         static_cast<double>(shader->bytes_per_pass().cached_shade) + pixels * 16.0,
-                         hits * 3.0 * 2.0 * m, false, light.stages.shade_kernel_ms});
-  }
-  return out;
-}
-
-std::string cost_model_markdown(const std::vector<StageCost>& view,
-                                const std::vector<StageCost>& light) {
-  std::string md = "\n## Cost model\n\n";
-  md +=
-      "Bytes each stage moves and FLOPs it does, counted from this frame loop (docs/rendering.md "
-      "\"Cost model\"), and the time they imply on a device: max(bytes / bandwidth, FLOPs / peak) "
-      "for device stages, bytes / host link for uploads, with nominal peak figures. The G-buffer "
-      "is traced with Embree on the host here; on a GPU it would be rasterised, modelled as "
-      "writing its fields once. `measured` is this run's median (device kernel time where there "
-      "is one); `GB/s here` the traffic it achieved.\n\n";
-  md += "| change | stage | MB | MFLOPs | measured ms | GB/s here |";
-  for (const auto& d : model_devices()) md += fmt::format(" model ms, {} |", d.name);
-  md += "\n|---|---|---:|---:|---:|---:|";
-  for (std::size_t i = 0; i < model_devices().size(); ++i) md += "---:|";
-  md += "\n";
-  std::vector<double> total(model_devices().size(), 0.0);
-  std::vector<double> total_light(model_devices().size(), 0.0);
-  const auto rows = [&](const char* change, const std::vector<StageCost>& costs,
-                        std::vector<double>& sum) {
-    for (const StageCost& c : costs) {
-      md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {} | {} |", change, c.stage, c.bytes / 1e6,
-                        c.flops / 1e6, c.measured_ms > 0 ? fmt_ms(c.measured_ms) : std::string("—"),
-                        c.measured_ms > 0 ? fmt::format("{:.1f}", c.bytes / (c.measured_ms * 1e6))
-                                          : std::string("—"));
-      for (std::size_t i = 0; i < model_devices().size(); ++i) {
-        const double t = model_ms(c, model_devices()[i]);
-        sum[i] += t;
-        md += fmt::format(" {:.3f} |", t);
-      }
-      md += "\n";
-    }
-  };
-  rows("view", view, total);
-  rows("light", light, total_light);
-  md += "| **view** | **frame (model fps)** | | | | |";
-  for (const double t : total) md += fmt::format(" {:.3f} ({:.0f}) |", t, t > 0 ? 1e3 / t : 0.0);
-  md += "\n| **light** | **frame (model fps)** | | | | |";
-  for (const double t : total_light)
-    md += fmt::format(" {:.3f} ({:.0f}) |", t, t > 0 ? 1e3 / t : 0.0);
-  md +=
-      "\n\nThe model is a lower bound: it ignores launch overheads (tens of microseconds per "
-      "kernel), gathers that waste cache-line bytes, and the host's share of a frame. A view "
-      "change's light side (the newly visible vertices' relight) is not in it.\n";
-  return md;
-}
-
-nlohmann::json cost_model_json(const std::vector<StageCost>& view,
-                               const std::vector<StageCost>& light) {
-  nlohmann::json j = nlohmann::json::array();
-  for (const auto& [change, costs] : {std::pair{"view", &view}, std::pair{"light", &light}})
-    for (const StageCost& c : *costs) {
-      nlohmann::json models = nlohmann::json::object();
-      for (const auto& d : model_devices()) models[d.name] = model_ms(c, d);
-      j.push_back({{"change", change},
-                   {"stage", c.stage},
-                   {"bytes", c.bytes},
-                   {"flops", c.flops},
-                   {"upload", c.upload},
-                   {"measured_ms", c.measured_ms},
-                   {"model_ms", models}});
-    }
-  return j;
-}
-
 // Whether the frames ran the cached shading kernels (DeviceBtfShader::uses_view_cache).
 bool view_cache_used(const FrameRenderer& r) {
   return r.device_shader() && r.device_shader()->uses_view_cache();
@@ -584,7 +441,7 @@ std::string load_average() {
 
 std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer& r,
                          const LoopResult& view, const LoopResult& light,
-                         const StageCosts& stage_costs, const experiments::Provenance& prov,
+                         const FrameStageCosts& stage_costs, const experiments::Provenance& prov,
                          const std::string& load) {
   const auto paper = paper_fps(p.desc.name);
   const std::size_t hits = r.gbuffer().hit_count();
@@ -650,7 +507,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
     md +=
         fmt::format("| {} | {} | {} | |\n", name, fmt_ms(view.stages.*f), fmt_ms(light.stages.*f));
   };
-  row("G-buffer (Embree) ms", &FrameStageTimes::gbuffer_ms);
+  row("G-buffer ms", &FrameStageTimes::gbuffer_ms);
   row("G-buffer upload ms", &FrameStageTimes::gbuffer_upload_ms);
   row("light projection ms", &FrameStageTimes::project_ms);
   row("relight ms (incl. light upload, L* read-back)", &FrameStageTimes::relight_ms);
@@ -669,7 +526,7 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
       p.setup_seconds, p.transfer_cache_hit ? "from cache" : "computed",
       p.compress_cache_hit ? "from cache" : "computed", p.btf_cache_hits,
       p.materials.part_material.size());
-  md += cost_model_markdown(stage_costs.view, stage_costs.light);
+  md += cost_model_markdown(stage_costs);
   return md;
 }
 
@@ -755,9 +612,13 @@ void run_fps(const FpsCli& o) {
   j["view_change"] = loop_json(view);
   j["light_change"] = loop_json(light);
   j["view_to_light_frame_ratio"] = view_to_light_ratio(view, light);
-  const StageCosts stage_costs = frame_stage_costs(
-      r, frame_costs(p), view, light, p.materials.part_material.front()->light_basis().dim);
-  j["cost_model"] = cost_model_json(stage_costs.view, stage_costs.light);
+  const FrameCosts costs = frame_costs(p);
+  const FrameStageCosts stage_costs =
+      frame_stage_costs(FrameCounts::of(r, static_cast<double>(costs.transfer_bytes),
+                                        costs.transfer_flops, costs.material_flops_per_pixel,
+                                        p.materials.part_material.front()->light_basis().dim),
+                        view.stages, light.stages);
+  j["cost_model"] = cost_model_json(stage_costs);
   j["paper"] = paper ? nlohmann::json{{"table", paper->table},
                                       {"view_fps", paper->view},
                                       {"light_fps", paper->light},

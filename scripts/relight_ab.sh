@@ -5,6 +5,8 @@
 # built with (copied from a build tree, or the build tree's bench/ with its core/ beside it).
 #   scripts/relight_ab.sh OUT_DIR BACKENDS ROUNDS NAME=DIR [NAME=DIR ...]
 # e.g. scripts/relight_ab.sh results/bench/relight-ab cpca,cpca_sh 5 base=/tmp/base new=build/release
+# RELIGHT_AB_SUMMARY_ONLY=1 rewrites ab.md from the JSON files already in OUT_DIR. ab.md names
+# each build by the git hash its binary was built at (the benchmark's context).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT="$1" BACKENDS="$2" ROUNDS="$3"
@@ -14,6 +16,7 @@ export POCL_MAX_PTHREAD_COUNT="${POCL_MAX_PTHREAD_COUNT:-$(nproc)}"
 export POCL_CPU_MAX_CU_COUNT="${POCL_CPU_MAX_CU_COUNT:-$(nproc)}"
 filter="relight/($(echo "$BACKENDS" | tr ',' '|'))/"
 for round in $(seq 1 "$ROUNDS"); do
+  [[ -n "${RELIGHT_AB_SUMMARY_ONLY:-}" ]] && break
   for spec in "$@"; do
     name="${spec%%=*}" dir="${spec#*=}"
     bin="$dir/relight_bench" libs="$dir"
@@ -27,18 +30,20 @@ python3 - "$OUT" "$ROUNDS" "$*" "$BACKENDS" <<'PY'
 import json, statistics, subprocess, sys, datetime
 out, rounds, specs, backends = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(), sys.argv[4]
 names = [s.split("=", 1)[0] for s in specs]
-ms = {}
+ms, builds = {}, {}
 for n in names:
     for r in range(1, rounds + 1):
-        for b in json.load(open(f"{out}/{n}-{r}.json"))["benchmarks"]:
+        run = json.load(open(f"{out}/{n}-{r}.json"))
+        builds[n] = run["context"].get("git_hash", "?")
+        for b in run["benchmarks"]:
             if b.get("aggregate_name") == "median":
                 ms.setdefault(b["run_name"], {}).setdefault(n, []).append(b["real_time"])
 git = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True).stdout.strip()
-dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout.strip()
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
 with open(f"{out}/ab.md", "w") as o:
     o.write(f"# Relight, {' against '.join(names)}, interleaved over {rounds} rounds\n\n")
-    o.write(f"- command: `scripts/relight_ab.sh {out} {backends} {rounds} {' '.join(specs)}`; git {git}{' (dirty)' if dirty else ''}; {cpu}; {datetime.datetime.utcnow().isoformat(timespec='seconds')}Z\n")
+    o.write(f"- command: `scripts/relight_ab.sh {out} {backends} {rounds} {' '.join(specs)}`; run from git {git}; {cpu}; {datetime.datetime.utcnow().isoformat(timespec='seconds')}Z\n")
+    o.write("- builds (each binary's build stamp): " + ", ".join(f"{n} {builds[n]}" for n in names) + "\n")
     o.write("- each cell: the median over the rounds of each round's median of 5 repetitions, ms per relight\n\n")
     o.write("| benchmark | " + " | ".join(names) + " | " + " | ".join(f"{names[0]} / {n}" for n in names[1:]) + " |\n")
     o.write("|---|" + "---|" * (2 * len(names) - 1) + "\n")

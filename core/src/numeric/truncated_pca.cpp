@@ -179,7 +179,9 @@ void gram_path(const A& a, const Eigen::VectorXd& mu, Eigen::Index k, TruncatedP
     }
   }
   const Eigen::Index have = std::min(k, m);
-  const SymmetricEigen eig = top_symmetric_eigen(g, have);
+  // Eigen's solver, not LAPACK's: these solves run in parallel over clusters, and the serial
+  // OpenBLAS is entered by one thread at a time (docs/build-options.md, PRTLAB_LAPACK).
+  const SymmetricEigen eig = top_symmetric_eigen_eigen(g, have);
   const double top = have > 0 ? std::max(0.0, eig.values[0]) : 0.0;
   // An eigenvalue this small carries no direction that survives rounding; its component comes
   // from the completion instead.

@@ -41,7 +41,7 @@ class ClContext;
 
 /// Wall-clock milliseconds of the stages of one frame (those not run are 0).
 struct FrameStageTimes {
-  double gbuffer_ms = 0;         ///< view change: Embree primary rays
+  double gbuffer_ms = 0;         ///< view change: the G-buffer (rasterised, or primary rays)
   double gbuffer_upload_ms = 0;  ///< view change: G-buffer compaction + upload (device path)
   double project_ms = 0;         ///< light change: CompressedTransfer::project_light
   double relight_ms = 0;         ///< light change: relight (device: light upload and kernels)
