@@ -209,13 +209,10 @@ TEST(GBuffer, PartsAndDeterminism) {
   EXPECT_GT(parts[1], 100);
 }
 
-// The packet tracer (the default) against one rtcIntersect1 per pixel: the same triangle at
-// every pixel, barycentrics and depths to float rounding, the same frames. Cameras: the mesh
-// small in the image (most pixels outside its window), partly outside the image, the eye
-// inside the bounding box (no window), and a non-multiple-of-4 image size.
-TEST(GBuffer, PacketsEqualSingleRays) {
-  const Mesh scene = sphere_and_box(40, 20, 0.2);
-  const GBufferTracer tracer(scene);
+// The cameras the traced paths are compared on: the mesh small in the image (most pixels
+// outside its window), partly outside the image, the eye inside the bounding box of
+// sphere_and_box (no window: every pixel traced), and a non-multiple-of-4 image size.
+std::vector<Camera> reference_cameras() {
   std::vector<Camera> cams(4);
   cams[0].eye = {0, 0, 7};
   cams[0].width = 203;
@@ -228,6 +225,17 @@ TEST(GBuffer, PacketsEqualSingleRays) {
   cams[3].eye = {0.3, 3, 3};
   cams[3].width = 64;
   cams[3].height = 48;
+  return cams;
+}
+
+// The packet tracer (the default) against one rtcIntersect1 per pixel: the same triangle at
+// every pixel, barycentrics and depths to float rounding, the same frames. Cameras: the mesh
+// small in the image (most pixels outside its window), partly outside the image, the eye
+// inside the bounding box (no window), and a non-multiple-of-4 image size.
+TEST(GBuffer, PacketsEqualSingleRays) {
+  const Mesh scene = sphere_and_box(40, 20, 0.2);
+  const GBufferTracer tracer(scene);
+  const std::vector<Camera> cams = reference_cameras();
   GBuffer reused;
   for (std::size_t c = 0; c < cams.size(); ++c) {
     const GBuffer a = tracer.trace(cams[c], PrimaryRays::kSingle);
@@ -268,18 +276,7 @@ TEST(GBuffer, PacketsEqualSingleRays) {
 TEST(GBuffer, RasterEqualsSingleRaysAwayFromEdges) {
   const Mesh scene = sphere_and_box(40, 20, 0.2);
   const GBufferTracer tracer(scene);
-  std::vector<Camera> cams(4);
-  cams[0].eye = {0, 0, 7};
-  cams[0].width = 203;
-  cams[0].height = 97;
-  cams[1].eye = {2.5, 0.5, 2};
-  cams[1].target = {1.5, 0, 0};
-  cams[2].eye = {0.2, 0.1, 0.1};
-  cams[2].target = {-0.7, 0, 0};
-  cams[2].fov_y_deg = 100;
-  cams[3].eye = {0.3, 3, 3};
-  cams[3].width = 64;
-  cams[3].height = 48;
+  const std::vector<Camera> cams = reference_cameras();
   const auto near_edge = [](const GBuffer& g, std::size_t i) {
     if (g.triangle[i] < 0) return false;
     const float b1 = g.bary[2 * i], b2 = g.bary[2 * i + 1];
