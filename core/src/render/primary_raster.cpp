@@ -38,6 +38,10 @@ inline Edge edge(const Projected* v, std::uint32_t ia, std::uint32_t ib) {
   return e;
 }
 
+int clamp_to_int(double v, int lo, int hi) {
+  return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
+}
+
 }  // namespace
 
 bool rasterize_primary(std::span<const Vec3> positions, std::span<const std::uint32_t> indices,
@@ -107,12 +111,11 @@ bool rasterize_primary(std::span<const Vec3> positions, std::span<const std::uin
             // Edge-on: its projection is a segment, which no pixel centre's ray meets but by
             // grazing it.
             if (!(std::abs(area) > 0)) continue;
-            const int ya = std::max(y0, static_cast<int>(std::ceil(std::min({a.y, b.y, c.y}))));
-            const int yb =
-                std::min(y1 - 1, static_cast<int>(std::floor(std::max({a.y, b.y, c.y}))));
-            const int xa = std::max(0, static_cast<int>(std::ceil(std::min({a.x, b.x, c.x}))));
-            const int xb =
-                std::min(width - 1, static_cast<int>(std::floor(std::max({a.x, b.x, c.x}))));
+            // Clamped before the conversion: a vertex near the eye's plane projects far away.
+            const int ya = clamp_to_int(std::ceil(std::min({a.y, b.y, c.y})), y0, y1 - 1);
+            const int yb = clamp_to_int(std::floor(std::max({a.y, b.y, c.y})), y0 - 1, y1 - 1);
+            const int xa = clamp_to_int(std::ceil(std::min({a.x, b.x, c.x})), 0, width - 1);
+            const int xb = clamp_to_int(std::floor(std::max({a.x, b.x, c.x})), -1, width - 1);
             const double sign = area > 0 ? 1.0 : -1.0;
             for (int y = ya; y <= yb; ++y) {
               // The columns where every edge function has the area's sign, from each edge's
