@@ -63,11 +63,12 @@ bool rasterize_primary(std::span<const Vec3> positions, std::span<const std::uin
   }
 
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  hits.triangle.assign(pixels, -1);
+  // Sized here, cleared by the strip that owns the rows (in parallel, while they are in cache).
+  hits.triangle.resize(pixels);
   hits.b1.resize(pixels);
   hits.b2.resize(pixels);
   hits.t.resize(pixels);
-  hits.view_depth.assign(pixels, std::numeric_limits<double>::infinity());
+  hits.view_depth.resize(pixels);
   std::vector<double>& nearest = hits.view_depth;
 
   // Triangles binned by the strips their rows reach (counting sort: the bins in one array).
@@ -100,6 +101,11 @@ bool rasterize_primary(std::span<const Vec3> positions, std::span<const std::uin
       [&](const tbb::blocked_range<int>& range) {
         for (int s = range.begin(); s != range.end(); ++s) {
           const int y0 = s * kStripRows, y1 = std::min(height, y0 + kStripRows);
+          const std::size_t p0 = static_cast<std::size_t>(y0) * width,
+                            p1 = static_cast<std::size_t>(y1) * width;
+          std::fill(hits.triangle.begin() + p0, hits.triangle.begin() + p1, -1);
+          std::fill(nearest.begin() + p0, nearest.begin() + p1,
+                    std::numeric_limits<double>::infinity());
           for (std::uint32_t k = count[s]; k < count[s + 1]; ++k) {
             const std::uint32_t t = bin[k];
             const std::uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1],
