@@ -65,7 +65,17 @@ struct FpsCli : SceneCli {
   int frames = 30;
   std::string out;
   bool no_cull = false;
+  std::string primary_rays = "raster";
 };
+
+PrimaryRays parse_primary_rays(const std::string& name) {
+  if (name == "raster") return PrimaryRays::kRaster;
+  if (name == "packets") return PrimaryRays::kPackets;
+  if (name == "single") return PrimaryRays::kSingle;
+  throw ParameterError(fmt::format(
+      "--primary-rays '{}': use raster (the default), packets or single (docs/rendering.md)",
+      name));
+}
 
 void add_scene_options(CLI::App* c, SceneCli& o, bool env_required) {
   c->add_option("scene", o.scene, "Scene name or .toml path")->required();
@@ -478,12 +488,13 @@ std::string fps_markdown(const FpsCli& o, const Prepared& p, const FrameRenderer
   md += fmt::format("| storage and FLOPs | {} |\n", costs_text(frame_costs(p)));
   md += fmt::format(
       "| image | {} x {}, view `{}`, {} hit pixels ({:.1f} %) at the first camera, {} texels, "
-      "view cache {} |\n",
+      "view cache {}, G-buffer `{}` |\n",
       p.camera.width, p.camera.height, scene_view(p.desc, o.view).name, hits,
       100.0 * hits / (static_cast<double>(p.camera.width) * p.camera.height), o.filter,
       o.no_view_cache      ? "off"
       : view_cache_used(r) ? "on"
-                           : "on but unused (no part's material gains from it)");
+                           : "on but unused (no part's material gains from it)",
+      o.primary_rays);
   md += fmt::format(
       "| frames | {} view changes (the camera orbits the target about +y, {:.1f} deg apart), {} "
       "light changes (`{}` rotated about +y, {:.1f} deg apart, cubemaps prepared before timing) "
@@ -543,6 +554,7 @@ void run_fps(const FpsCli& o) {
   if (!o.out.empty() && fs::path(o.out).extension() != ".md")
     throw ParameterError(
         fmt::format("--out '{}': must end in .md (the JSON goes beside it)", o.out));
+  const PrimaryRays primary_rays = parse_primary_rays(o.primary_rays);  // before any work
   Prepared p = prepare(o, 640, 480, "courtyard");
   const int n = o.frames;
   // Inputs of every frame, prepared before any timing.
@@ -556,6 +568,7 @@ void run_fps(const FpsCli& o) {
                   p.device_options);
   r.set_light_options(p.light_options);
   r.set_culling(!o.no_cull);
+  r.set_primary_rays(primary_rays);
   // Warm-up: kernel builds, first launches, caches.
   r.set_camera(cameras[0]);
   r.set_environment(envs[0]);
@@ -603,6 +616,7 @@ void run_fps(const FpsCli& o) {
   j["btf_resolution"] = o.btf_resolution;
   j["view_cache"] = !o.no_view_cache;
   j["view_cache_used"] = view_cache_used(r);
+  j["primary_rays"] = o.primary_rays;
   j["hit_pixels"] = r.gbuffer().hit_count();
   // Of the default view (cameras[0], where the light loop runs).
   j["culling"] = {{"enabled", r.culling()},
@@ -690,6 +704,10 @@ void add_render_commands(CLI::App& app) {
   f->add_flag("--no-cull", fo->no_cull,
               "Relight every vertex on a light change (default: only the vertices the view sees, "
               "where the backend can; the image is the same)");
+  f->add_option("--primary-rays", fo->primary_rays,
+                "How the G-buffer finds what each pixel sees: raster, packets (Embree packets) "
+                "or single (one Embree ray a pixel, the reference)")
+      ->capture_default_str();
   f->callback([fo] { run_fps(*fo); });
 }
 

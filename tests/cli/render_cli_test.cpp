@@ -120,6 +120,11 @@ TEST_F(RenderCli, RejectsUnknownInputsNamingThem) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("nosuchkey"), std::string::npos) << r.err;
 
+  r = run("-q fps tiny-sphere-plane --env " + sky() + small() + "--frames 1 --primary-rays rays");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("'rays'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("packets"), std::string::npos) << "lists the choices: " << r.err;
+
   r = run("-q render nosuchscene --env " + sky() + small() + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("nosuchscene"), std::string::npos) << r.err;
