@@ -89,11 +89,16 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   const Eigen::MatrixXd gt = g.transpose();
   const auto pixels = static_cast<std::size_t>(g.rows());
   const bool per_pixel = t.rows() >= 2 * pixels;
-  Eigen::MatrixXd s, ps, wt;
+  Eigen::MatrixXd wt;
+  // Per pixel: S and P S in float, column-major, so a non-zero reads two contiguous n_t-float
+  // columns. The products per row stream these columns from memory; in float the pair for all N
+  // pixels fits a last-level cache that the double pair overflows.
+  Eigen::MatrixXf s, ps;
   MatF pf;
   if (per_pixel) {
-    s = p.solve(p.pixel_weights().transpose());  // n_t x N
-    ps = (gt * g) * s;                           // n_t x N
+    const Eigen::MatrixXd sd = p.solve(p.pixel_weights().transpose());  // n_t x N
+    s = sd.cast<float>();
+    ps = ((gt * g) * sd).cast<float>();  // n_t x N
   } else {
     wt = p.pixel_weights().transpose();  // n_t x N: b's columns
     pf = (gt * g).cast<float>();         // P = G^T G
@@ -126,20 +131,20 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
                      2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
             }
           }
-          Eigen::VectorXd c(n), pc(n);
+          Eigen::VectorXf c(n), pc(n);
           for (std::size_t row = r0; per_pixel && row < r1; ++row) {
             c.setZero();
             pc.setZero();
             for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e) {
-              const auto v = static_cast<double>(t.value(e));
+              const float v = t.value(e);
               c += v * s.col(t.column(e));
               pc += v * ps.col(t.column(e));
             }
             const auto i = static_cast<Eigen::Index>(row - r0);
-            dst.row(i) = c.transpose().cast<float>();
+            dst.row(i) = c.transpose();
             // ||G c - t||^2 - ||t||^2 with the stored (float) c in the cross term and in one
             // factor of the quadratic one: P c_stored and P c differ by rounding only.
-            acc += pc.dot(dst.row(i).transpose().cast<double>()) -
+            acc += pc.cast<double>().dot(dst.row(i).transpose().cast<double>()) -
                    2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
           }
           const std::size_t now = ++done;
