@@ -126,5 +126,24 @@ TEST(LocalFrame, FromNormalTangentFallsBackWhenTheTangentIsDegenerate) {
   }
 }
 
+// The unit-normal entry point is the general one without the normalisation: for a unit n the
+// same frame bit for bit, including the fallback (here, n normalised exactly as
+// from_normal_tangent normalises it).
+TEST(LocalFrame, FromUnitNormalTangentEqualsFromNormalTangentForAUnitNormal) {
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3d raw = 3.0 * prt::testing::random_direction(rng);
+    const Vec3d n = raw / glm::length(raw);
+    for (const Vec3d& tangent : {prt::testing::random_direction(rng), Vec3d{0, 0, 0}, 2.0 * n}) {
+      const LocalFrame a = LocalFrame::from_normal_tangent(raw, tangent);
+      const LocalFrame b = LocalFrame::from_unit_normal_tangent(n, tangent);
+      EXPECT_EQ(a.t, b.t);
+      EXPECT_EQ(a.b, b.b);
+      EXPECT_EQ(a.n, b.n);
+      EXPECT_NEAR(glm::dot(b.t, b.n), 0.0, 1e-12);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace prt

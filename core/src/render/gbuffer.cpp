@@ -208,19 +208,7 @@ void GBufferTracer::trace(const Camera& camera, GBuffer& g, PrimaryRays rays) co
       n /= nl;
     }
     const Vec3d t_sum = b0 * im.frame_t[vi[0]] + b1 * im.frame_t[vi[1]] + b2 * im.frame_t[vi[2]];
-    // LocalFrame::from_normal_tangent for the unit n here, without its normal-only frame
-    // unless the tangent degenerates.
-    Vec3d tangent = t_sum - n * glm::dot(n, t_sum);
-    tangent -= n * glm::dot(n, tangent);
-    const double tl = glm::length(tangent);
-    LocalFrame f;
-    if (tl > 1e-8 * glm::length(t_sum) && std::isfinite(tl)) {
-      f.n = n;
-      f.t = tangent / tl;
-      f.b = glm::cross(n, f.t);
-    } else {
-      f = LocalFrame::from_normal(n);
-    }
+    const LocalFrame f = LocalFrame::from_unit_normal_tangent(n, t_sum);
     put4(g.normal, i, f.n);
     put4(g.view_local, i, f.to_local(-d));
   };

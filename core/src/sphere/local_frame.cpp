@@ -24,8 +24,12 @@ LocalFrame LocalFrame::from_normal(const Vec3d& normal) {
 }
 
 LocalFrame LocalFrame::from_normal_tangent(const Vec3d& normal, const Vec3d& tangent) {
-  LocalFrame f = from_normal(normal);
-  const Vec3d& n = f.n;
+  const double len = glm::length(normal);
+  PRT_CHECK(len > 0.0 && std::isfinite(len), "frame normal must be finite and non-zero");
+  return from_unit_normal_tangent(normal / len, tangent);
+}
+
+LocalFrame LocalFrame::from_unit_normal_tangent(const Vec3d& n, const Vec3d& tangent) {
   Vec3d t = tangent - n * glm::dot(n, tangent);
   // A second pass removes what rounding left of n when tangent was nearly parallel to it.
   t -= n * glm::dot(n, t);
@@ -33,7 +37,9 @@ LocalFrame LocalFrame::from_normal_tangent(const Vec3d& normal, const Vec3d& tan
   // A tangent (nearly) parallel to n, zero or non-finite (degenerate UVs) has no usable
   // direction in the tangent plane: keep the normal-only frame.
   const double scale = glm::length(tangent);
-  if (!(len > 1e-8 * scale) || !std::isfinite(len)) return f;
+  if (!(len > 1e-8 * scale) || !std::isfinite(len)) return from_normal(n);
+  LocalFrame f;
+  f.n = n;
   f.t = t / len;
   f.b = glm::cross(n, f.t);  // t x (n x t) = n for unit, orthogonal n and t
   return f;

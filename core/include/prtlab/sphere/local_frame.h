@@ -22,6 +22,9 @@ struct LocalFrame {
   /// (Gram-Schmidt), b = n x t; falls back to from_normal when the projection is degenerate
   /// (shorter than 1e-8 |tangent|, zero or not finite).
   static LocalFrame from_normal_tangent(const Vec3d& n, const Vec3d& tangent);
+  /// The same for an n already of unit length (not normalised again; the G-buffer's per-pixel
+  /// frames): the normal-only frame is built only when the tangent degenerates.
+  static LocalFrame from_unit_normal_tangent(const Vec3d& n, const Vec3d& tangent);
 };
 
 }  // namespace prt
