@@ -179,6 +179,13 @@ void ClusterUnfolding::apply_transpose(const Eigen::MatrixXd& a, Eigen::MatrixXd
   });
 }
 
+void ClusterUnfolding::transpose(Eigen::MatrixXd& out) const {
+  if (formed_)
+    out = y_.transpose();
+  else
+    apply_transpose(Eigen::MatrixXd::Identity(m_, m_), out, true);
+}
+
 Eigen::MatrixXd members_transpose_product(const float* z, Eigen::Index zsize,
                                           std::span<const std::uint32_t> members,
                                           const Eigen::MatrixXd& a) {
@@ -204,7 +211,7 @@ VertexMode top_vertex_mode(const ClusterUnfolding& y, const VertexModeOptions& o
                r2 = static_cast<double>(y.light_rank());
   const bool warm = start_right != nullptr || start_left != nullptr;
   const double gram_cost =
-      (y.formed() ? dm * dm * dw : 2 * dm * dm * zs + dm * zs * r2 + dm * dm * dw) +
+      (y.formed() ? 0.5 * dm * dm * dw : 2 * dm * dm * zs + dm * zs * r2 + 0.5 * dm * dm * dw) +
       4 * dm * dm * dm;
   const double iteration_cost =
       y.formed() ? 4 * dm * dw * dk : 0.5 * (4 * dm * zs * dk + 4 * dk * zs * r2);
@@ -221,11 +228,12 @@ VertexMode top_vertex_mode(const ClusterUnfolding& y, const VertexModeOptions& o
     return out;
   }
   if (m <= 2 * k || gram_cost <= (warm ? 3.0 : 6.0) * iteration_cost) {
-    // Exact: the m x m Gram matrix of Y from Y^T (w x m), then v = Y^T u / sigma orthonormalised
-    // to rounding (callers rely on V^T V = I).
+    // Exact: the m x m Gram matrix of Y from Y^T (w x m), its lower triangle (all the solver
+    // reads), then v = Y^T u / sigma orthonormalised to rounding (callers rely on V^T V = I).
     Eigen::MatrixXd yt;
-    y.apply_transpose(Eigen::MatrixXd::Identity(m, m), yt, true);
-    const Eigen::MatrixXd g = yt.transpose() * yt;
+    y.transpose(yt);
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(m, m);
+    g.selfadjointView<Eigen::Lower>().rankUpdate(yt.transpose());
     const SymmetricEigen eig = top_symmetric_eigen(g, r);
     const Eigen::MatrixXd& u = eig.vectors;
     out.sigma = eig.values.cwiseMax(0.0).cwiseSqrt();

@@ -43,6 +43,8 @@ class ClusterUnfolding {
   void apply(const Eigen::MatrixXd& v, Eigen::MatrixXd& out, bool exact = false) const;
   /// out = Y^T a ((R1 R2) x k), a: m x k; `exact` as for apply.
   void apply_transpose(const Eigen::MatrixXd& a, Eigen::MatrixXd& out, bool exact = false) const;
+  /// out = Y^T ((R1 R2) x m) in double: a copy when formed, else Y^T I.
+  void transpose(Eigen::MatrixXd& out) const;
 
  private:
   const float* z_;

@@ -389,14 +389,14 @@ class Cta {
     std::vector<Eigen::Index> first{0};
     for (const CtaCluster& c : m_.clusters) first.push_back(first.back() + c.dual.rows());
     MatF b(first.back(), zs);
-    for (std::size_t c = 0; c < m_.clusters.size(); ++c) {
+    tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
       const CtaCluster& cl = m_.clusters[c];
       for (Eigen::Index j = 0; j < cl.dual.rows(); ++j) {
         const Eigen::Map<const RowMajorMatrixXd> vj(cl.dual.row(j).data(), r1_, r2_);
         const RowMajorMatrixXd bj = vj * cl.light.transpose();
         b.row(first[c] + j) = Eigen::Map<const Eigen::RowVectorXd>(bj.data(), zs).cast<float>();
       }
-    }
+    });
     const Eigen::Map<const MatF> zall(z_.data(), static_cast<Eigen::Index>(t_.vertices), zs);
     std::vector<std::uint32_t> next = m_.assignments;
     moved_weights_.resize(static_cast<Eigen::Index>(t_.vertices), r3_);

@@ -60,15 +60,31 @@ Eigen::MatrixXd pixel_values(const SrbfProjector& p, const CubemapLayout& layout
   return g;
 }
 
-/// Sum over the stored entries of row `row` of T_k (G c)_k: the row's part of <T~, T>.
-double row_cross(const TransferMatrix& t, std::size_t row, const Eigen::MatrixXd& gt,
-                 const float* c, Eigen::Index n) {
-  const Eigen::Map<const Eigen::VectorXf> cv(c, n);
-  double s = 0;
-  for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
-    s += static_cast<double>(t.value(e)) * gt.col(t.column(e)).dot(cv.cast<double>());
-  return s;
-}
+/// <G c, t> for a row t of T and SRBF coefficients c: G^T t accumulated over the row's stored
+/// entries, then one dot product with c in double. G^T is held in float (pixel k's n_t values
+/// contiguous): every non-zero reads one column, and the float matrix for all N pixels is half
+/// the memory traffic of the double one, which is what this loop is bound by.
+class CrossTerm {
+ public:
+  explicit CrossTerm(const Eigen::MatrixXd& g) : gt_(g.transpose().cast<float>()) {}
+
+  /// q += sum over the row's entries of t_k G^T[:, k] (q: n_t floats, the caller's scratch).
+  void accumulate(const TransferMatrix& t, std::size_t row, Eigen::VectorXf& q) const {
+    for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
+      q += t.value(e) * gt_.col(t.column(e));
+  }
+  const Eigen::MatrixXf& gt() const { return gt_; }
+
+  double operator()(const TransferMatrix& t, std::size_t row, const float* c,
+                    Eigen::VectorXf& q) const {
+    q.setZero(gt_.rows());
+    accumulate(t, row, q);
+    return q.cast<double>().dot(Eigen::Map<const Eigen::VectorXf>(c, gt_.rows()).cast<double>());
+  }
+
+ private:
+  Eigen::MatrixXf gt_;  ///< n_t x N
+};
 
 struct Projection {
   std::vector<float> coefficients;  // rows x n_t: the tensor, vertex after vertex
@@ -87,6 +103,7 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   // pixels) blocks of rows are solved as they come.
   const Eigen::MatrixXd g = pixel_values(p, layout);
   const Eigen::MatrixXd gt = g.transpose();
+  const CrossTerm cross(g);
   const auto pixels = static_cast<std::size_t>(g.rows());
   const bool per_pixel = t.rows() >= 2 * pixels;
   Eigen::MatrixXd wt;
@@ -113,6 +130,7 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   const double srbf_sq =
       deterministic_sum(blocks, 1, [&](std::size_t blk_begin, std::size_t blk_end) {
         double acc = 0;
+        Eigen::VectorXf q(n);
         for (std::size_t blk = blk_begin; blk != blk_end; ++blk) {
           const std::size_t r0 = blk * kBlock, r1 = std::min(t.rows(), r0 + kBlock);
           Eigen::Map<MatF> dst(out.coefficients.data() + r0 * static_cast<std::size_t>(n),
@@ -128,24 +146,26 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
             for (std::size_t row = r0; row < r1; ++row) {
               const auto i = static_cast<Eigen::Index>(row - r0);
               acc += static_cast<double>(cp.row(i).dot(dst.row(i))) -
-                     2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
+                     2.0 * cross(t, row, dst.row(i).data(), q);
             }
           }
           Eigen::VectorXf c(n), pc(n);
           for (std::size_t row = r0; per_pixel && row < r1; ++row) {
             c.setZero();
             pc.setZero();
+            q.setZero();
             for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e) {
               const float v = t.value(e);
               c += v * s.col(t.column(e));
               pc += v * ps.col(t.column(e));
+              q += v * cross.gt().col(t.column(e));
             }
             const auto i = static_cast<Eigen::Index>(row - r0);
             dst.row(i) = c.transpose();
             // ||G c - t||^2 - ||t||^2 with the stored (float) c in the cross term and in one
             // factor of the quadratic one: P c_stored and P c differ by rounding only.
-            acc += pc.cast<double>().dot(dst.row(i).transpose().cast<double>()) -
-                   2.0 * row_cross(t, row, gt, dst.row(i).data(), n);
+            acc += (pc.cast<double>() - 2.0 * q.cast<double>())
+                       .dot(dst.row(i).transpose().cast<double>());
           }
           const std::size_t now = ++done;
           std::lock_guard lock(progress_mutex);
@@ -274,7 +294,7 @@ SrbfCtaArrays encode(const CtaModel& m, const Eigen::MatrixXd& view, const Param
 /// ||T~_x||^2 = tr(K_x G_c K_x^T H) with G_c = U_c^T P U_c, P = g^T g, H = U^T U,
 /// K_x = refold(V_c^T W_x), and <T~, T> summed over T's stored entries.
 double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen::MatrixXd& g) {
-  const Eigen::MatrixXd gt = g.transpose();
+  const CrossTerm cross(g);
   const Eigen::MatrixXd pm = g.transpose() * g;
   const auto r1 = a.rank_view, r2 = a.rank_light, r3 = a.rank_vertex, nt = a.srbf_count,
              mm = a.local_count;
@@ -291,6 +311,7 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen
   });
   const double approx = deterministic_sum(a.vertices, 8, [&](std::size_t begin, std::size_t end) {
     double acc = 0;
+    Eigen::VectorXf q;
     for (std::size_t x = begin; x != end; ++x) {
       const std::size_t c = a.ids[x];
       const Eigen::Map<const MatF> v(a.duals.data() + c * static_cast<std::size_t>(r3) * r1 * r2,
@@ -301,8 +322,8 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen
       acc += ((k * gc[c]).array() * (h * k).array()).sum();
       const MatF rows = (u * k * uc[c].transpose()).cast<float>();  // M x n_t
       for (int m = 0; m < mm; ++m)
-        acc -= 2.0 * row_cross(t, x * static_cast<std::size_t>(mm) + static_cast<std::size_t>(m),
-                               gt, rows.row(m).data(), nt);
+        acc -= 2.0 * cross(t, x * static_cast<std::size_t>(mm) + static_cast<std::size_t>(m),
+                           rows.row(m).data(), q);
     }
     return acc;
   });
@@ -318,22 +339,21 @@ double folded_error(const TransferMatrix& t, const SrbfProjector& p, const Cubem
                     const BrdfFold& fold,
                     const std::function<void(std::size_t, RowMajorMatrixXd&)>& approx) {
   const Eigen::MatrixXd g = pixel_values(p, layout);
-  const Eigen::MatrixXd gt = g.transpose();
+  const CrossTerm cross(g);
   const Eigen::MatrixXd pm = g.transpose() * g;
-  const auto nt = static_cast<Eigen::Index>(p.basis().size());
   const auto mm = static_cast<std::size_t>(t.local_count());
   const Eigen::MatrixXd psi_t = fold.light.transpose();
   const double approx_sq =
       deterministic_sum(t.vertex_count(), 8, [&](std::size_t begin, std::size_t end) {
         double acc = 0;
         RowMajorMatrixXd y;
+        Eigen::VectorXf q;
         for (std::size_t x = begin; x != end; ++x) {
           approx(x, y);
           acc += ((y * pm).array() * y.array()).sum();
           const MatF rows = (psi_t * y).cast<float>();  // M x n_t
           for (std::size_t j = 0; j < mm; ++j)
-            acc -= 2.0 *
-                   row_cross(t, x * mm + j, gt, rows.row(static_cast<Eigen::Index>(j)).data(), nt);
+            acc -= 2.0 * cross(t, x * mm + j, rows.row(static_cast<Eigen::Index>(j)).data(), q);
         }
         return acc;
       });
