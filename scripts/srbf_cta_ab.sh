@@ -5,12 +5,16 @@
 # Environment: SCENE (bunny), PARAMS (rank_light=134, fig6 --quick's point), ROUNDS (1),
 # BASE_LIBS (a folder put first on LD_LIBRARY_PATH for BASE: its own libprtlab_core.so).
 # Writes OUT_DIR (results/srbf-cta-speed) /ab.md with per-phase times, the relative Frobenius
-# error and the SE ratio of each run, and the runs' logs and JSON.
+# error and the SE ratio of each run, and the runs' logs and JSON. REPORT_ONLY=1 rewrites ab.md
+# from the logs already in OUT_DIR. Each build is named by its own version stamp (`--version`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BASE="$1" NEW="${2:-build/release/cli/prtlab}" OUT="${3:-results/srbf-cta-speed}"
 SCENE="${SCENE:-bunny}" PARAMS="${PARAMS:-rank_light=134}" ROUNDS="${ROUNDS:-1}"
 mkdir -p "$OUT"
+LD_LIBRARY_PATH="${BASE_LIBS:-}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$BASE" --version > "$OUT/base.version"
+"$NEW" --version > "$OUT/new.version"
+if [[ "${REPORT_ONLY:-0}" != 1 ]]; then
 cache="$(mktemp -d)"
 trap 'rm -rf "$cache"' EXIT
 export PRTLAB_CACHE="$cache"
@@ -29,12 +33,12 @@ for r in $(seq "$ROUNDS"); do
     echo "round $r $who: $(cat "$OUT/$who-$r.time") (wall s, max RSS KB)"
   done
 done
+fi
 python3 - "$OUT" "$ROUNDS" "$SCENE" "$PARAMS" "$*" <<'PY'
 import json, re, subprocess, sys, platform, datetime
 out, rounds, scene, params, argv = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
-git = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True).stdout.strip()
-dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout.strip() != ""
+versions = {who: open(f"{out}/{who}.version").read().strip() for who in ("base", "new")}
 pat = re.compile(r"projection ([\d.]+) s, CTA initialisation ([\d.]+) s, clustering ([\d.]+) s \((\d+) iterations\).*error ([\d.]+) s")
 rows = []
 for r in range(1, rounds + 1):
@@ -48,7 +52,7 @@ for r in range(1, rounds + 1):
 with open(f"{out}/ab.md", "w") as o:
     o.write(f"# srbf_cta compression, previous code against this commit, one run\n\n")
     o.write(f"- command: `scripts/srbf_cta_ab.sh {argv}` (SCENE={scene}, PARAMS='{params}', ROUNDS={rounds})\n")
-    o.write(f"- git: {git}{' (dirty)' if dirty else ''}; machine: {cpu}, {subprocess.run(['nproc'], capture_output=True, text=True).stdout.strip()} cores; {platform.platform()}\n")
+    o.write(f"- builds: base `{versions['base']}`, new `{versions['new']}`; machine: {cpu}, {subprocess.run(['nproc'], capture_output=True, text=True).stdout.strip()} cores; {platform.platform()}\n")
     o.write(f"- date (UTC): {datetime.datetime.utcnow().isoformat(timespec='seconds')}Z\n\n")
     o.write("| round | build | wall s | max RSS GiB | projection s | CTA init s | clustering s (iterations) | error s | relative Frobenius error | SE ratio % | storage bytes |\n|---|---|---|---|---|---|---|---|---|---|---|\n")
     for r, who, wall, rss, g, f, st in rows:
