@@ -13,6 +13,7 @@
 #include "point_measurement.h"
 #include "provenance.h"
 #include "prtlab/base/error.h"
+#include "prtlab/base/log.h"
 #include "prtlab/base/named_warning.h"
 #include "prtlab/base/statistics.h"
 #include "prtlab/compress/compression_stage.h"
@@ -179,14 +180,30 @@ struct EqualStoragePoint {
   json search;
 };
 
-// One backend at the target storage: the search over its size knob (when the experiment leaves
-// it free), then the measurement at the value found.
-EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const SceneBench& bench,
-                                           const std::string& scene, const std::string& backend,
-                                           std::uint64_t target, StageCache& cache,
-                                           const BenchOptions& bo,
-                                           const std::function<void(const std::string&)>& report) {
+struct EqualStorageParams {
+  std::map<std::string, std::string> params;  ///< the experiment's, the size knob's value found
+  json search;
+};
+
+// One backend's parameters at the target storage: the search over its size knob (when the
+// experiment leaves it free), each probe a compression through the stage cache.
+// How a probe compresses: compress_cached, or compress_together in a distributed run's
+// collective phase.
+using CompressFn =
+    std::function<CompressionResult(const std::map<std::string, std::string>& compression)>;
+
+EqualStorageParams equal_storage_params(const ExperimentSpec& spec, const SceneBench& bench,
+                                        const std::string& scene, const std::string& backend,
+                                        std::uint64_t target, StageCache& cache,
+                                        const BenchOptions& bo,
+                                        const std::function<void(const std::string&)>& report,
+                                        CompressFn compress = nullptr) {
   const auto& entry = CompressorRegistry::instance().get(backend);
+  if (!compress)
+    compress = [&](const std::map<std::string, std::string>& compression) {
+      return compress_cached(backend, compression, bench.prepared.input(entry),
+                             bench.prepared.transfer.key, cache, bo.cache_mode, bo.show_progress);
+    };
   auto params = spec.params.contains(backend) ? spec.params.at(backend)
                                               : std::map<std::string, std::string>{};
   json search = {{"scene", scene}, {"backend", backend}, {"target_bytes", target}};
@@ -197,9 +214,7 @@ EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const Sce
       p[entry.size_knob->key] = format_knob(v, integer);
       report(fmt::format("{} {}: storage search, {} = {}", scene, backend, entry.size_knob->key,
                          p[entry.size_knob->key]));
-      const CompressionResult cr = compress_cached(
-          backend, split_point_params(entry, p).compression, bench.prepared.input(entry),
-          bench.prepared.transfer.key, cache, bo.cache_mode, bo.show_progress);
+      const CompressionResult cr = compress(split_point_params(entry, p).compression);
       return cr.compressed->storage().total_bytes();
     };
     const StorageSearch s =
@@ -221,6 +236,17 @@ EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const Sce
                    {"note", entry.size_knob ? "the experiment fixes the size knob"
                                             : "no size knob: its storage is what it is"}});
   }
+  return {std::move(params), std::move(search)};
+}
+
+// One backend at the target storage: its parameters there, then the measurement.
+EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const SceneBench& bench,
+                                           const std::string& scene, const std::string& backend,
+                                           std::uint64_t target, StageCache& cache,
+                                           const BenchOptions& bo,
+                                           const std::function<void(const std::string&)>& report) {
+  auto [params, search] =
+      equal_storage_params(spec, bench, scene, backend, target, cache, bo, report);
   report(fmt::format("{} {}: measuring", scene, backend));
   PointOutcome out = measure_point(bench, spec, backend, params, true, cache, bo);
   const double bytes = out.record["storage_bytes"].get<double>();
@@ -233,6 +259,26 @@ EqualStoragePoint measure_at_equal_storage(const ExperimentSpec& spec, const Sce
   search["ratio"] = ratio;
   search["reached"] = out.record["reached"];
   return {std::move(out), std::move(search)};
+}
+
+// One compression on every rank together (inside a CollectiveScope, so that a backend that
+// splits its work does), unless the root finds it in the stage cache: then each rank loads it
+// (or, not finding it in a node-local cache, computes it alone). The root's look decides for
+// all, as in `prtlab compress` on several ranks, so no rank waits in a collective the others
+// skip.
+CompressionResult compress_together(Communicator& comm, const std::string& backend,
+                                    const std::map<std::string, std::string>& compression,
+                                    const TransferInput& input, const Hash128& transfer_key,
+                                    StageCache& cache, CacheMode mode, bool show_progress) {
+  const Hash128 key = compression_key(backend, compression, transfer_key);
+  const bool hit =
+      comm.broadcast(
+          {static_cast<std::uint8_t>(comm.is_root() && mode == CacheMode::kUse &&
+                                     cache.contains(compression_stage(backend), key))})[0] != 0;
+  if (hit) return compress_cached(backend, compression, input, transfer_key, cache, mode, false);
+  const CollectiveScope together(comm);
+  return compress_cached(backend, compression, input, transfer_key, cache, CacheMode::kRefresh,
+                         show_progress);
 }
 
 // Failures the ranks of a distributed run met, by scene and point label ("" for the scene).
@@ -316,6 +362,63 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
   stored.cache_mode = CacheMode::kUse;
   std::optional<SceneBench> bench;
   std::size_t bench_of = variants.size();
+  const auto bench_for = [&](std::size_t variant) -> const SceneBench& {
+    if (bench_of != variant) {
+      bench.reset();
+      bench_of = variants.size();
+      bench.emplace(prepare_bench(variants[variant], spec, cache, stored));
+      bench_of = variant;
+    }
+    return *bench;
+  };
+  // Backends that split one compression over the ranks (CompressorEntry::collective): every rank
+  // compresses their points together first, into the stage cache, so that a file's slowest point
+  // (srbf_cta on the chair) uses the whole allocation; the work queue below then measures them
+  // from the cache like any other point. A compression that fails here fails again there, alone,
+  // which records it.
+  std::set<std::size_t> compressed_together;
+  for (std::size_t k = 0; k < tasks.size(); ++k) {
+    const Task& t = tasks[k];
+    const auto& entry = CompressorRegistry::instance().get(t.backend);
+    if (!entry.collective) continue;
+    const SceneVariant& v = variants[t.variant];
+    // The scene's stages and the storage target each rank finds or computes alone; every rank
+    // goes on to the collective part only if all have them, so that none waits in a collective
+    // another skipped. (A compression's own errors come alike on every rank.)
+    std::optional<std::uint64_t> target;
+    bool ready = true;
+    try {
+      const SceneBench& b = bench_for(t.variant);
+      if (spec.kind == ExperimentKind::kEqualStorage)
+        target = storage_target(spec, b, cache, stored, bo.show_progress);
+    } catch (const std::exception&) {
+      ready = false;  // the work queue below meets the same error and records it
+    }
+    if (comm.any(!ready)) continue;
+    try {
+      const SceneBench& b = bench_for(t.variant);
+      const CompressFn together = [&](const std::map<std::string, std::string>& compression) {
+        return compress_together(comm, t.backend, compression, b.prepared.input(entry),
+                                 b.prepared.transfer.key, cache, bo.cache_mode, bo.show_progress);
+      };
+      std::map<std::string, std::string> params = t.params;
+      if (spec.kind == ExperimentKind::kEqualStorage) {
+        say(fmt::format("{} {}: compressing on every rank together", v.name, t.backend));
+        params =
+            equal_storage_params(
+                spec, b, v.name, t.backend, *target, cache, bo, [](const std::string&) {}, together)
+                .params;
+      } else {
+        say(fmt::format("{} {}: compressing on every rank together", v.name,
+                        point_label(t.backend, t.params)));
+      }
+      (void)together(split_point_params(entry, params).compression);
+      compressed_together.insert(k);
+    } catch (const std::exception& e) {
+      log_debug("{} {}: the collective compression failed ({}); measured alone below", v.name,
+                t.backend, e.what());
+    }
+  }
   {
     WorkQueue points(comm, tasks.size());
     while (const auto k = points.next()) {
@@ -323,20 +426,16 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
       const SceneVariant& v = variants[t.variant];
       const std::string what =
           spec.kind == ExperimentKind::kEqualStorage ? t.backend : point_label(t.backend, t.params);
+      // A point compressed together above is in the cache even with --recompute.
+      const BenchOptions& po = compressed_together.contains(*k) ? stored : bo;
       try {
-        if (bench_of != t.variant) {
-          bench.reset();
-          bench_of = variants.size();
-          bench.emplace(prepare_bench(v, spec, cache, stored));
-          bench_of = t.variant;
-        }
+        const SceneBench& b = bench_for(t.variant);
         if (spec.kind == ExperimentKind::kEqualStorage) {
-          const std::uint64_t target =
-              storage_target(spec, *bench, cache, stored, bo.show_progress);
-          (void)measure_at_equal_storage(spec, *bench, v.name, t.backend, target, cache, bo, say);
+          const std::uint64_t target = storage_target(spec, b, cache, stored, bo.show_progress);
+          (void)measure_at_equal_storage(spec, b, v.name, t.backend, target, cache, po, say);
         } else {
           say(fmt::format("{} {}", v.name, what));
-          (void)measure_point(*bench, spec, t.backend, t.params, false, cache, bo);
+          (void)measure_point(b, spec, t.backend, t.params, false, cache, po);
         }
       } catch (const std::exception& e) {
         failed(v.name, what, e.what());

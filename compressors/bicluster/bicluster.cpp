@@ -693,6 +693,7 @@ CompressorEntry registry_entry() {
       "all-frequency bi-scale PRT); lossless at the default error=0";
   // At the default parameters (error = 0): the conformance suite checks the default result.
   e.lossless = true;
+  e.collective = true;       // its row groups go through a work queue over the ranks
   e.cost_hint_seconds = 20;  // where it was measured: docs/cli.md, "Cost hints"
   e.params = {
       {"groups",

@@ -16,10 +16,12 @@
 #include "prtlab/base/deterministic_reduce.h"
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
+#include "prtlab/distributed/communicator.h"
 #include "prtlab/numeric/elbg.h"
 #include "prtlab/numeric/row_set.h"
 #include "prtlab/numeric/symmetric_eigen.h"
 #include "prtlab/numeric/truncated_pca.h"
+#include "srbf_cta/cluster_fit_exchange.h"
 #include "srbf_cta/cluster_unfolding.h"
 
 namespace prt::srbf_cta {
@@ -246,12 +248,25 @@ class Cta {
   void refit(const std::vector<char>& which, bool warm, bool from_reclassification = false) {
     const auto t0 = Clock::now();
     step_stats_.reset();
-    tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
-      if (!which[c]) return;
+    const auto fit = [&](std::size_t c) {
       const bool reseeded = from_reclassification && reseeded_[c];
       fit_cluster(m_.clusters[c], vertex_bases_[c], warm && !reseeded, true,
                   from_reclassification && !reseeded ? &moved_weights_ : nullptr);
-    });
+    };
+    if (Communicator* comm = collective(); comm != nullptr && comm->distributed()) {
+      std::vector<std::size_t> todo;
+      for (std::size_t c = 0; c < m_.clusters.size(); ++c)
+        if (which[c]) todo.push_back(c);
+      fit_clusters_on_ranks(
+          *comm, todo, [&](std::size_t c) { return m_.clusters[c].members.size(); }, fit,
+          [&](std::size_t c) {
+            return ClusterFitState{&m_.clusters[c], &vertex_bases_[c], &m_.weights};
+          });
+    } else {
+      tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
+        if (which[c]) fit(c);
+      });
+    }
     m_.refit_errors.push_back(total_error());
     std::vector<std::size_t> sizes;
     for (std::size_t c = 0; c < m_.clusters.size(); ++c)

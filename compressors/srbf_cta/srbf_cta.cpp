@@ -679,6 +679,7 @@ CompressorEntry registry_entry() {
   // goes, which a 48k-vertex scene needs (its folded rows would take 14 GB).
   e.inputs.brdf_signal = true;
   e.lossless = false;
+  e.collective = true;         // its cluster refits go through a work queue over the ranks
   e.cost_hint_seconds = 1600;  // where it was measured: docs/cli.md, "Cost hints"
   e.create = [](const ParamSet& ps) -> std::unique_ptr<Compressor> {
     Params p;
@@ -711,7 +712,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;
-  e.version = 4;
+  e.version = 5;
   e.published = {
       {"bunny",
        {{"srbfs", "642"},

@@ -11,7 +11,8 @@
 #   - a killed distributed run resumes to the same points.csv;
 #   - node-local caches: the root measures the other ranks' points again, the same, and warns;
 #   - a point that fails on a rank is recorded, the run goes on and exits 1, as one process;
-#   - compress with bicluster's row groups over the ranks: the one-process result;
+#   - compress with bicluster's row groups, and srbf_cta's cluster refits, over the ranks: the
+#     one-process result;
 #   - four processes writing the same stage into one cache at once leave a valid entry;
 #   - a command that does not spread over ranks is refused on 2 ranks.
 set -euo pipefail
@@ -131,10 +132,15 @@ for params in "groups=4" "groups=5 error=0.05"; do
   done
   echo "compress bicluster $params on 2 and 4 ranks: $one (one process: the same)"
 done
-for backend in cpca sh_biscale; do  # sh_biscale: the ranks compute the SH transfer it asks for
-  one=$("$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend "$backend" --force --json --no-image | summary)
-  got=$(mpi 2 "$PRTLAB" -q --no-opencl compress tiny-sphere-plane --backend "$backend" --force --json --no-image | summary)
+# sh_biscale: the ranks compute the SH transfer it asks for; srbf_cta: its cluster refits spread
+# over the ranks (each rank's threads taking clusters from one queue), every fit sent to all.
+for backend in cpca sh_biscale srbf_cta; do
+  args=(-q --no-opencl compress tiny-sphere-plane --backend "$backend" --force --json --no-image)
+  [[ $backend == srbf_cta ]] && args+=(--param clusters=5 --param srbfs=162)
+  one=$("$PRTLAB" --threads 1 "${args[@]}" | summary)
+  got=$(mpi 2 "$PRTLAB" --threads 2 "${args[@]}" | summary)
   [[ "$got" == "$one" ]] || fail "$backend on 2 ranks: $got, one process: $one"
+  echo "compress $backend on 2 ranks: $one (one process: the same)"
 done
 
 # Concurrent writers of one stage into one cache (what ranks on a shared folder do).

@@ -73,6 +73,11 @@ struct CompressorEntry {
   double cost_hint_seconds = 0;
   bool lossless =
       false;  ///< at default parameters, relight equals the exact product up to float rounding
+  /// compress() splits its own work over the ranks of a collective scope (distributed/
+  /// communicator.h, CollectiveScope), with the one-process result. A distributed experiment then
+  /// compresses this backend's points on every rank together before it hands out the points to
+  /// measure, so that a slow point uses the whole allocation.
+  bool collective = false;
   std::function<std::unique_ptr<Compressor>(const ParamSet&)> create;
   std::function<std::unique_ptr<CompressedTransfer>(const ArchiveReader&)> load;
   std::string origin = "built-in";  ///< "built-in" or the plugin's path
