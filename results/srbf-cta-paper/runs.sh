@@ -10,7 +10,8 @@ $B bunny $R/bunny-more.json "srbf_cta:clusters=9,$P,spread=0.75" "srbf_cta:clust
 # A rougher BRDF (more energy in the leading view terms), with and without the view truncation.
 $B bunny $R/bunny-rough.json "srbf_cta:clusters=9,$P,brdf_roughness=0.6" "srbf_cta:clusters=9,rank_view=16,rank_light=48,rank_vertex=24,brdf_roughness=0.6" > $R/bunny-rough.log 2>&1
 # The paper's vertex density on the largest bunny (47,960 vertices / 359 = 134 clusters), m = 0.6.
-$B bunny-48k $R/bunny-48k.json "srbf_cta:clusters=134,$P,brdf_roughness=0.6" > $R/bunny-48k.log 2>&1
+# Native build (README's default since issue 51), timed by /usr/bin/time -v.
+/usr/bin/time -v build/native/bench/srbf_cta_paper_bench bunny-48k $R/bunny-48k.json "srbf_cta:clusters=134,$P,brdf_roughness=0.6" > $R/bunny-48k.log 2>&1
 # Table 2's CPCA through the registered cpca backend on the declared BRDF-weighted input
 # (signal=brdf implied): row CPCA of the 16 folded rows of every vertex, 2 passes per vector.
 C="weights=float16,iterations_per_vector=2"
