@@ -9,7 +9,6 @@
 #include <chrono>
 #include <iterator>
 #include <map>
-#include <mutex>
 #include <optional>
 #include <random>
 #include <unordered_map>
@@ -17,7 +16,7 @@
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/distributed/byte_stream.h"
-#include "prtlab/distributed/work_queue.h"
+#include "prtlab/distributed/shared_work.h"
 
 namespace prt::bicluster {
 
@@ -514,34 +513,15 @@ std::vector<Biclustering> search_groups_on_ranks(Communicator& comm, const Spars
                                                  const SearchOptions& options, Progress& progress) {
   const std::size_t groups = bounds.size() - 1;
   log_debug("bicluster: {} groups over {} ranks", groups, comm.size());
-  std::vector<std::uint8_t> mine;
-  ByteWriter w(mine);
-  {
-    // Each of the rank's threads takes groups from the queue (one at a time: the queue is
-    // not thread-safe) until none is left.
-    WorkQueue queue(comm, groups);
-    std::mutex lock;
-    const int workers = tbb::this_task_arena::max_concurrency();
-    tbb::parallel_for(0, workers, [&](int) {
-      for (;;) {
-        std::optional<std::size_t> g;
-        {
-          const std::lock_guard hold(lock);
-          g = queue.next();
-        }
-        if (!g) return;
-        const Biclustering part =
-            search_rows(t, bounds[*g], bounds[*g + 1],
-                        group_seed(options.seed, static_cast<int>(*g)), progress);
-        const std::lock_guard hold(lock);
-        w.put<std::uint64_t>(*g);
+  // Each thread of each rank takes groups from one queue until none is left.
+  const std::vector<std::uint8_t> all =
+      compute_on_all_ranks(comm, groups, [&](std::size_t g, std::vector<std::uint8_t>& out) {
+        const Biclustering part = search_rows(
+            t, bounds[g], bounds[g + 1], group_seed(options.seed, static_cast<int>(g)), progress);
+        ByteWriter w(out);
+        w.put<std::uint64_t>(g);
         put(w, part);
-      }
-    });
-  }
-  std::vector<std::uint8_t> all;
-  for (const auto& bytes : comm.gather(mine)) all.insert(all.end(), bytes.begin(), bytes.end());
-  all = comm.broadcast(std::move(all));
+      });
   std::vector<Biclustering> parts(groups);
   std::vector<bool> seen(groups, false);
   ByteReader r(all, "bicluster groups");

@@ -1,17 +1,12 @@
 #include "srbf_cta/cluster_fit_exchange.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
-#include <mutex>
 #include <numeric>
-#include <optional>
 
 #include "prtlab/base/error.h"
 #include "prtlab/base/log.h"
 #include "prtlab/distributed/byte_stream.h"
-#include "prtlab/distributed/work_queue.h"
+#include "prtlab/distributed/shared_work.h"
 
 namespace prt::srbf_cta {
 namespace {
@@ -69,30 +64,13 @@ void fit_clusters_on_ranks(Communicator& comm, std::span<const std::size_t> whic
   std::vector<std::size_t> order(which.begin(), which.end());
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return members(a) > members(b); });
-  std::vector<std::uint8_t> mine;
-  ByteWriter w(mine);
-  {
-    WorkQueue queue(comm, order.size());
-    std::mutex lock;  // the queue is not thread-safe, and the writer is shared
-    const int workers = tbb::this_task_arena::max_concurrency();
-    tbb::parallel_for(0, workers, [&](int) {
-      for (;;) {
-        std::optional<std::size_t> i;
-        {
-          const std::lock_guard hold(lock);
-          i = queue.next();
-        }
-        if (!i) return;
-        const std::size_t c = order[*i];
+  const std::vector<std::uint8_t> all =
+      compute_on_all_ranks(comm, order.size(), [&](std::size_t i, std::vector<std::uint8_t>& out) {
+        const std::size_t c = order[i];
         fit(c);
-        const std::lock_guard hold(lock);
+        ByteWriter w(out);
         put_state(w, c, state(c));
-      }
-    });
-  }
-  std::vector<std::uint8_t> all;
-  for (const auto& bytes : comm.gather(mine)) all.insert(all.end(), bytes.begin(), bytes.end());
-  all = comm.broadcast(std::move(all));
+      });
   std::vector<char> seen(*std::max_element(order.begin(), order.end()) + 1, 0);
   ByteReader r(all, "srbf_cta cluster fits");
   std::size_t received = 0;
@@ -107,8 +85,8 @@ void fit_clusters_on_ranks(Communicator& comm, std::span<const std::size_t> whic
   }
   PRT_CHECK(received == order.size(), "srbf_cta: {} of {} cluster fits arrived", received,
             order.size());
-  log_debug("srbf_cta: {} cluster refits over {} ranks, this rank's share {} bytes", order.size(),
-            comm.size(), mine.size());
+  log_debug("srbf_cta: {} cluster refits over {} ranks ({} bytes exchanged)", order.size(),
+            comm.size(), all.size());
 }
 
 }  // namespace prt::srbf_cta
