@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <exception>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -19,6 +21,7 @@
 #include "prtlab/compress/compression_stage.h"
 #include "prtlab/compress/compressor_registry.h"
 #include "prtlab/compress/light_options.h"
+#include "prtlab/distributed/shared_work.h"
 #include "prtlab/distributed/work_queue.h"
 #include "prtlab/opencl/cl_context.h"
 #include "prtlab/render/image_error.h"
@@ -276,9 +279,29 @@ CompressionResult compress_together(Communicator& comm, const std::string& backe
           {static_cast<std::uint8_t>(comm.is_root() && mode == CacheMode::kUse &&
                                      cache.contains(compression_stage(backend), key))})[0] != 0;
   if (hit) return compress_cached(backend, compression, input, transfer_key, cache, mode, false);
-  const CollectiveScope together(comm);
-  return compress_cached(backend, compression, input, transfer_key, cache, CacheMode::kRefresh,
-                         show_progress);
+  std::optional<CompressionResult> out;
+  std::exception_ptr failure;
+  try {
+    const CollectiveScope together(comm);
+    out = compress_cached(backend, compression, input, transfer_key, cache, CacheMode::kRefresh,
+                          show_progress);
+  } catch (const ParameterError&) {
+    failure = std::current_exception();  // the parameters are checked alike on every rank
+  } catch (const CollectiveError&) {
+    failure = std::current_exception();  // thrown on every rank together
+  } catch (const std::exception& e) {
+    // An error on this rank alone (memory, a file) may leave the others waiting in one of the
+    // compression's collectives: end every rank rather than hang.
+    std::fprintf(stderr, "prtlab: rank %d: %s: the collective compression failed: %s\n",
+                 comm.rank(), backend.c_str(), e.what());
+    DistributedSession::abort(1);
+  }
+  if (comm.any(failure != nullptr)) {
+    if (failure) std::rethrow_exception(failure);
+    throw CollectiveError(
+        fmt::format("{}: the collective compression failed on another rank", backend));
+  }
+  return std::move(*out);
 }
 
 // Failures the ranks of a distributed run met, by scene and point label ("" for the scene).
@@ -376,15 +399,15 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
   // (srbf_cta on the chair) uses the whole allocation; the work queue below then measures them
   // from the cache like any other point. A compression that fails here fails again there, alone,
   // which records it.
-  std::set<std::size_t> compressed_together;
-  for (std::size_t k = 0; k < tasks.size(); ++k) {
+  // With --recompute (not kUse) the work queue below recomputes every compression anyway.
+  for (std::size_t k = 0; bo.cache_mode == CacheMode::kUse && k < tasks.size(); ++k) {
     const Task& t = tasks[k];
     const auto& entry = CompressorRegistry::instance().get(t.backend);
     if (!entry.collective) continue;
     const SceneVariant& v = variants[t.variant];
     // The scene's stages and the storage target each rank finds or computes alone; every rank
     // goes on to the collective part only if all have them, so that none waits in a collective
-    // another skipped. (A compression's own errors come alike on every rank.)
+    // another skipped. compress_together makes a compression's errors every rank's.
     std::optional<std::uint64_t> target;
     bool ready = true;
     try {
@@ -413,7 +436,6 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
                         point_label(t.backend, t.params)));
       }
       (void)together(split_point_params(entry, params).compression);
-      compressed_together.insert(k);
     } catch (const std::exception& e) {
       log_debug("{} {}: the collective compression failed ({}); measured alone below", v.name,
                 t.backend, e.what());
@@ -426,16 +448,14 @@ KnownFailures warm_stage_cache(const ExperimentSpec& spec,
       const SceneVariant& v = variants[t.variant];
       const std::string what =
           spec.kind == ExperimentKind::kEqualStorage ? t.backend : point_label(t.backend, t.params);
-      // A point compressed together above is in the cache even with --recompute.
-      const BenchOptions& po = compressed_together.contains(*k) ? stored : bo;
       try {
         const SceneBench& b = bench_for(t.variant);
         if (spec.kind == ExperimentKind::kEqualStorage) {
           const std::uint64_t target = storage_target(spec, b, cache, stored, bo.show_progress);
-          (void)measure_at_equal_storage(spec, b, v.name, t.backend, target, cache, po, say);
+          (void)measure_at_equal_storage(spec, b, v.name, t.backend, target, cache, bo, say);
         } else {
           say(fmt::format("{} {}", v.name, what));
-          (void)measure_point(b, spec, t.backend, t.params, false, cache, po);
+          (void)measure_point(b, spec, t.backend, t.params, false, cache, bo);
         }
       } catch (const std::exception& e) {
         failed(v.name, what, e.what());

@@ -9,10 +9,10 @@
 # archive stays under the 64 MiB a device run may carry (checked). Data comes from the local
 # data folder that scripts/setup.sh --data fills (PRTLAB_DATA).
 set -euo pipefail
+OUT="$(realpath -m "${1:-$(dirname "$0")/../build/gpu-bundle.tar.xz}")"
+DATA="$(realpath -m "${PRTLAB_DATA:-${XDG_CACHE_HOME:-$HOME/.cache}/prtlab/data}")"
 cd "$(dirname "$0")/.."
-OUT="${1:-build/gpu-bundle.tar.xz}"
 BUILD=build/gpu-bundle
-DATA="${PRTLAB_DATA:-${XDG_CACHE_HOME:-$HOME/.cache}/prtlab/data}"
 for f in meshes/bunny00.off envmaps/courtyard.exr; do
   [[ -f "$DATA/$f" ]] || { echo "gpu-bundle: $DATA/$f is missing (run scripts/setup.sh --data)" >&2; exit 1; }
 done
@@ -29,7 +29,7 @@ bins=("$BUILD/cli/prtlab" "$BUILD/bench/relight_bench" "$BUILD/bench/shading_ben
 cp "${bins[@]}" "$root/bin/"
 # Every library the binaries load, by the path this machine resolves, under its soname.
 for b in "${bins[@]}"; do
-  ldd "$b" | awk '$2 == "=>" && $3 ~ /^\// {print $1, $3} $1 ~ /^\/.*ld-linux/ {print "LOADER", $1}'
+  ldd "$b" | awk '$2 == "=>" && $3 ~ /^\// && $1 !~ /\// {print $1, $3} $1 ~ /^\/.*ld-linux/ {print "LOADER", $1}'
 done | sort -u | while read -r name path; do
   if [[ $name == LOADER ]]; then
     cp -L "$path" "$root/lib/ld-linux-x86-64.so.2"
@@ -38,9 +38,10 @@ done | sort -u | while read -r name path; do
   fi
 done
 # dlopen'ed, not in ldd: the ocl-icd loader finds vendors itself; PoCL is not carried (the GPU
-# is what the bundle is for), and glibc's own helpers the loader may open.
-for extra in libOpenCL.so.1 libdl.so.2 libpthread.so.0 librt.so.1; do
-  p="$(ldconfig -p | awk -v n="$extra" '$1 == n && /x86-64/ {print $NF; exit}')"
+# is what the bundle is for); glibc's own helpers the loader may open; TBB's allocator.
+ldc="$(command -v ldconfig || echo /sbin/ldconfig)"
+for extra in libOpenCL.so.1 libdl.so.2 libpthread.so.0 librt.so.1 libtbbmalloc.so.2; do
+  p="$("$ldc" -p | awk -v n="$extra" '$1 == n && /x86-64/ && !found {print $NF; found = 1}' || true)"
   [[ -n "$p" && ! -f "$root/lib/$extra" ]] && cp -L "$p" "$root/lib/$extra"
 done
 cp -r scenes "$root/scenes"
@@ -59,6 +60,7 @@ EOF
 done
 mkdir -p "$(dirname "$OUT")"
 tmp="$OUT.tmp.$$"
+trap 'rm -rf "$stage" "$tmp"' EXIT
 tar -C "$stage" -cJf "$tmp" prtlab-gpu
 mv "$tmp" "$OUT"
 bytes=$(stat -c %s "$OUT")

@@ -34,7 +34,8 @@ mkdir -p "$work/vendors"
 if [[ -n "${GPU_CHECK_ICD:-}" ]]; then
   cp "$GPU_CHECK_ICD" "$work/vendors/"
 else
-  lib="$(ldconfig -p 2>/dev/null | awk '$1 == "libnvidia-opencl.so.1" {print $NF; exit}')"
+  ldc="$(command -v ldconfig || echo /sbin/ldconfig)"
+  lib="$("$ldc" -p 2>/dev/null | awk '$1 == "libnvidia-opencl.so.1" && !found {print $NF; found = 1}' || true)"
   for d in /usr/lib/x86_64-linux-gnu /usr/lib64 /usr/local/nvidia/lib64 /usr/lib/wsl/lib; do
     [[ -z "$lib" && -e "$d/libnvidia-opencl.so.1" ]] && lib="$d/libnvidia-opencl.so.1"
   done
@@ -70,7 +71,7 @@ run precompute.json "$(left)" "${P[@]}" -q precompute bunny --json
 # Benchmarks: the OpenCL paths and their C++ references, short repetitions.
 bench=(--benchmark_min_time=0.2 --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
        --benchmark_out_format=json)
-backends="${GPU_CHECK_BACKENDS:-$("${P[@]}" list --json 2>/dev/null | awk '/"materials"/ {exit} /^      "name": "/ {gsub(/[",]/, "", $2); print $2}' | tr '\n' ' ')}"
+backends="${GPU_CHECK_BACKENDS:-$("${P[@]}" list --json 2>/dev/null | awk '/"materials"/ {done = 1} !done && /^      "name": "/ {gsub(/[",]/, "", $2); print $2}' | tr '\n' ' ' || true)}"
 [[ -n "$backends" ]] || backends="uncompressed csr_quantized bicluster cpca cpca_sh haar sh_biscale srbf_cta"
 run relight.txt $(( $(left) / 3 )) env PRTLAB_BENCH_BACKENDS="${backends// /,}" "$B/relight_bench" \
   --benchmark_filter='relight/' "${bench[@]}" --benchmark_out="$OUT/relight.json"
@@ -94,8 +95,8 @@ done
   for b in $backends; do
     f="$OUT/fps-$b.json"
     if [[ -s "$f" ]]; then
-      v="$(awk '/"view_change": \{/ {f = 1} f && /"fps":/ {gsub(/[^0-9.]/, "", $2); printf "%.1f", $2; exit}' "$f")"
-      l="$(awk '/"light_change": \{/ {f = 1} f && /"fps":/ {gsub(/[^0-9.]/, "", $2); printf "%.1f", $2; exit}' "$f")"
+      v="$(awk '/"view_change": \{/ {f = 1} f && /"fps": [0-9]/ {gsub(/[^0-9.]/, "", $2); printf "%.1f", $2; exit}' "$f")"
+      l="$(awk '/"light_change": \{/ {f = 1} f && /"fps": [0-9]/ {gsub(/[^0-9.]/, "", $2); printf "%.1f", $2; exit}' "$f")"
       echo "| \`$b\` | \`fps-$b.json\` | ${v:-?} / ${l:-?} |"
     else
       echo "| \`$b\` | (none: see \`fps-$b.json.log\`) | |"

@@ -12,9 +12,9 @@ cd "$(dirname "$0")/.."
 BASE="$1" NEW="${2:-build/release/cli/prtlab}" OUT="${3:-results/srbf-cta-speed}"
 SCENE="${SCENE:-bunny}" PARAMS="${PARAMS:-rank_light=134}" ROUNDS="${ROUNDS:-1}"
 mkdir -p "$OUT"
+if [[ "${REPORT_ONLY:-0}" != 1 ]]; then
 LD_LIBRARY_PATH="${BASE_LIBS:-}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$BASE" --version > "$OUT/base.version"
 "$NEW" --version > "$OUT/new.version"
-if [[ "${REPORT_ONLY:-0}" != 1 ]]; then
 cache="$(mktemp -d)"
 trap 'rm -rf "$cache"' EXIT
 export PRTLAB_CACHE="$cache"

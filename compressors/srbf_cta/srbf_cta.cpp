@@ -21,6 +21,7 @@
 #include "prtlab/base/log.h"
 #include "prtlab/base/named_warning.h"
 #include "prtlab/compress/brdf_signal.h"
+#include "prtlab/distributed/communicator.h"
 #include "prtlab/lighting/srbf_light.h"
 #include "prtlab/numeric/float16.h"
 #include "prtlab/sphere/icosphere.h"
@@ -61,29 +62,29 @@ Eigen::MatrixXd pixel_values(const SrbfProjector& p, const CubemapLayout& layout
 }
 
 /// <G c, t> for a row t of T and SRBF coefficients c: G^T t accumulated over the row's stored
-/// entries, then one dot product with c in double. G^T is held in float (pixel k's n_t values
-/// contiguous): every non-zero reads one column, and the float matrix for all N pixels is half
-/// the memory traffic of the double one, which is what this loop is bound by.
+/// entries, then one dot product with c in double. With G the pixel values of the SRBFs
+/// (non-negative, as T is) G^T is held in float: every non-zero reads one column, and the float
+/// matrix for all N pixels is half the memory traffic of the double one, which is what this loop
+/// is bound by. A light operator with entries of both signs (the stored model's, which solves
+/// the light fit) keeps double, where float sums could cancel.
+template <class Scalar>
 class CrossTerm {
  public:
-  explicit CrossTerm(const Eigen::MatrixXd& g) : gt_(g.transpose().cast<float>()) {}
+  using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+  explicit CrossTerm(const Eigen::MatrixXd& g) : gt_(g.transpose().cast<Scalar>()) {}
 
-  /// q += sum over the row's entries of t_k G^T[:, k] (q: n_t floats, the caller's scratch).
-  void accumulate(const TransferMatrix& t, std::size_t row, Eigen::VectorXf& q) const {
-    for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
-      q += t.value(e) * gt_.col(t.column(e));
-  }
-  const Eigen::MatrixXf& gt() const { return gt_; }
+  const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& gt() const { return gt_; }
 
-  double operator()(const TransferMatrix& t, std::size_t row, const float* c,
-                    Eigen::VectorXf& q) const {
+  double operator()(const TransferMatrix& t, std::size_t row, const float* c, Vector& q) const {
     q.setZero(gt_.rows());
-    accumulate(t, row, q);
-    return q.cast<double>().dot(Eigen::Map<const Eigen::VectorXf>(c, gt_.rows()).cast<double>());
+    for (std::uint32_t e = t.row_offsets()[row]; e < t.row_offsets()[row + 1]; ++e)
+      q += static_cast<Scalar>(t.value(e)) * gt_.col(t.column(e));
+    return q.template cast<double>().dot(
+        Eigen::Map<const Eigen::VectorXf>(c, gt_.rows()).cast<double>());
   }
 
  private:
-  Eigen::MatrixXf gt_;  ///< n_t x N
+  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> gt_;  ///< n_t x N
 };
 
 struct Projection {
@@ -103,7 +104,7 @@ Projection project_rows(const TransferMatrix& t, const SrbfProjector& p,
   // pixels) blocks of rows are solved as they come.
   const Eigen::MatrixXd g = pixel_values(p, layout);
   const Eigen::MatrixXd gt = g.transpose();
-  const CrossTerm cross(g);
+  const CrossTerm<float> cross(g);
   const auto pixels = static_cast<std::size_t>(g.rows());
   const bool per_pixel = t.rows() >= 2 * pixels;
   Eigen::MatrixXd wt;
@@ -294,7 +295,7 @@ SrbfCtaArrays encode(const CtaModel& m, const Eigen::MatrixXd& view, const Param
 /// ||T~_x||^2 = tr(K_x G_c K_x^T H) with G_c = U_c^T P U_c, P = g^T g, H = U^T U,
 /// K_x = refold(V_c^T W_x), and <T~, T> summed over T's stored entries.
 double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen::MatrixXd& g) {
-  const CrossTerm cross(g);
+  const CrossTerm<double> cross(g);
   const Eigen::MatrixXd pm = g.transpose() * g;
   const auto r1 = a.rank_view, r2 = a.rank_light, r3 = a.rank_vertex, nt = a.srbf_count,
              mm = a.local_count;
@@ -311,7 +312,7 @@ double stored_error(const SrbfCtaArrays& a, const TransferMatrix& t, const Eigen
   });
   const double approx = deterministic_sum(a.vertices, 8, [&](std::size_t begin, std::size_t end) {
     double acc = 0;
-    Eigen::VectorXf q;
+    Eigen::VectorXd q;
     for (std::size_t x = begin; x != end; ++x) {
       const std::size_t c = a.ids[x];
       const Eigen::Map<const MatF> v(a.duals.data() + c * static_cast<std::size_t>(r3) * r1 * r2,
@@ -339,7 +340,7 @@ double folded_error(const TransferMatrix& t, const SrbfProjector& p, const Cubem
                     const BrdfFold& fold,
                     const std::function<void(std::size_t, RowMajorMatrixXd&)>& approx) {
   const Eigen::MatrixXd g = pixel_values(p, layout);
-  const CrossTerm cross(g);
+  const CrossTerm<float> cross(g);
   const Eigen::MatrixXd pm = g.transpose() * g;
   const auto mm = static_cast<std::size_t>(t.local_count());
   const Eigen::MatrixXd psi_t = fold.light.transpose();
@@ -468,7 +469,12 @@ class SrbfCtaCompressor final : public Compressor {
     // A long CTA saves its state at most every kCheckpointSeconds (after the initialisation and
     // after clustering iterations) so that a killed run resumes; a finished run removes it.
     const std::filesystem::path checkpoint = cta_checkpoint_path(cta_checkpoint_key(view, o));
-    std::optional<CtaCheckpoint> resume = read_cta_checkpoint(checkpoint);
+    // Not on several ranks: each would decide alone whether to resume (a rank that saw another
+    // file would run other collectives than the rest) and write the file on its own clock.
+    const Communicator* ranks = collective();
+    const bool checkpoints = ranks == nullptr || !ranks->distributed();
+    std::optional<CtaCheckpoint> resume;
+    if (checkpoints) resume = read_cta_checkpoint(checkpoint);
     if (resume) {
       o.resume = &*resume;
       log_info(
@@ -478,8 +484,8 @@ class SrbfCtaCompressor final : public Compressor {
     }
     auto last_checkpoint = Clock::now();
     o.on_checkpoint = [&](const CtaCheckpoint& c) {
-      if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() <
-          kCheckpointSeconds)
+      if (!checkpoints || std::chrono::duration<double>(Clock::now() - last_checkpoint).count() <
+                              kCheckpointSeconds)
         return;
       const auto t1 = Clock::now();
       try {
@@ -498,7 +504,7 @@ class SrbfCtaCompressor final : public Compressor {
     };
     const CtaModel model = clustered_tensor_approximation(view, o);
     std::error_code removed;
-    std::filesystem::remove(checkpoint, removed);
+    if (checkpoints) std::filesystem::remove(checkpoint, removed);
     resume.reset();
     SrbfCtaArrays a =
         encode(model, fold ? Eigen::MatrixXd(fold->view * model.view_basis) : model.view_basis, p_,
