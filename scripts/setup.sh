@@ -16,7 +16,7 @@ PACKAGES=(
   libeigen3-dev libembree-dev libopenexr-dev libglm-dev
   libassimp-dev libmeshoptimizer-dev libspectra-dev liblbfgspp-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
-  libxxhash-dev libstb-dev libtbb-dev libopenblas0-serial
+  libxxhash-dev libstb-dev libtbb-dev libopenblas0-pthread
   libopenmpi-dev openmpi-bin
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-scipy python3-skimage python3-xxhash python3-pip

@@ -21,6 +21,7 @@
 #include "prtlab/numeric/row_set.h"
 #include "prtlab/numeric/symmetric_eigen.h"
 #include "prtlab/numeric/truncated_pca.h"
+#include "prtlab/storage/content_hash.h"
 #include "srbf_cta/cluster_fit_exchange.h"
 #include "srbf_cta/cluster_unfolding.h"
 
@@ -147,6 +148,7 @@ class Cta {
     const MatF ut = m_.view_basis.transpose().cast<float>();
     const auto i1 = static_cast<Eigen::Index>(t_.view), i2 = static_cast<Eigen::Index>(t_.light);
     z_.resize(t_.vertices * zsize());
+    products_first_.clear();  // reclassify()'s kept products were of the previous Z
     tbb::parallel_for(std::size_t{0}, t_.vertices, [&](std::size_t x) {
       Eigen::Map<MatF>(z_.data() + x * zsize(), r1_, i2).noalias() =
           ut * MapF(t_.vertex(x), i1, i2);
@@ -396,21 +398,49 @@ class Cta {
     step_stats_.add_light(seconds_since(t0));
   }
 
+  /// Digest of the bases a cluster's columns of `products_` were computed with.
+  static Hash128 bases_digest(const CtaCluster& c) {
+    Hasher h;
+    h.add(static_cast<std::uint64_t>(c.dual.rows())).add(static_cast<std::uint64_t>(c.dual.cols()));
+    h.add_array(std::span<const double>(c.dual.data(), static_cast<std::size_t>(c.dual.size())));
+    h.add(static_cast<std::uint64_t>(c.light.rows()))
+        .add(static_cast<std::uint64_t>(c.light.cols()));
+    h.add_array(std::span<const double>(c.light.data(), static_cast<std::size_t>(c.light.size())));
+    return h.digest();
+  }
+
   /// Returns the vertices moved and the total error they shed (in double, with these bases).
   std::pair<std::size_t, double> reclassify() {
+    const auto t0 = Clock::now();
     const Eigen::Index zs = static_cast<Eigen::Index>(zsize());
-    // B_c's rows refold(V_cj) U_c^T (R1 x I2), so that W_xc = B_c vec(Z_x): one product for
-    // every vertex and cluster.
     std::vector<Eigen::Index> first{0};
     for (const CtaCluster& c : m_.clusters) first.push_back(first.back() + c.dual.rows());
-    MatF b(first.back(), zs);
-    tbb::parallel_for(std::size_t{0}, m_.clusters.size(), [&](std::size_t c) {
-      const CtaCluster& cl = m_.clusters[c];
-      for (Eigen::Index j = 0; j < cl.dual.rows(); ++j) {
-        const Eigen::Map<const RowMajorMatrixXd> vj(cl.dual.row(j).data(), r1_, r2_);
-        const RowMajorMatrixXd bj = vj * cl.light.transpose();
-        b.row(first[c] + j) = Eigen::Map<const Eigen::RowVectorXd>(bj.data(), zs).cast<float>();
-      }
+    // W_xc for every vertex and cluster is kept between passes: only the clusters whose bases
+    // changed since (those refit or reseeded) are multiplied again, a fraction of the clusters
+    // once the clustering settles.
+    if (first != products_first_) {
+      products_.resize(static_cast<Eigen::Index>(t_.vertices), first.back());
+      products_first_ = first;
+      products_bases_.assign(m_.clusters.size(), Hash128{});
+    }
+    std::vector<std::size_t> stale;
+    std::vector<Hash128> digests(m_.clusters.size());
+    tbb::parallel_for(std::size_t{0}, m_.clusters.size(),
+                      [&](std::size_t c) { digests[c] = bases_digest(m_.clusters[c]); });
+    for (std::size_t c = 0; c < m_.clusters.size(); ++c)
+      if (digests[c] != products_bases_[c] && first[c + 1] > first[c]) stale.push_back(c);
+    // B's rows refold(V_cj) U_c^T (R1 x I2) for the stale clusters, so that W_xc = B_c vec(Z_x).
+    std::vector<Eigen::Index> row_of{0};
+    for (const std::size_t c : stale) row_of.push_back(row_of.back() + first[c + 1] - first[c]);
+    // In float: the products only choose candidates, each move is decided in double below.
+    MatF b(row_of.back(), zs);
+    tbb::parallel_for(std::size_t{0}, stale.size(), [&](std::size_t k) {
+      const CtaCluster& cl = m_.clusters[stale[k]];
+      const MatF dual = cl.dual.cast<float>();
+      const MatF light_t = cl.light.transpose().cast<float>();
+      for (Eigen::Index j = 0; j < cl.dual.rows(); ++j)
+        Eigen::Map<MatF>(b.row(row_of[k] + j).data(), r1_, static_cast<Eigen::Index>(t_.light))
+            .noalias() = MapF(dual.row(j).data(), r1_, r2_) * light_t;
     });
     const Eigen::Map<const MatF> zall(z_.data(), static_cast<Eigen::Index>(t_.vertices), zs);
     std::vector<std::uint32_t> next = m_.assignments;
@@ -421,9 +451,15 @@ class Cta {
     tbb::parallel_for(
         tbb::blocked_range<Eigen::Index>(0, static_cast<Eigen::Index>(t_.vertices), kBlock),
         [&](const auto& r) {
-          const MatF w = zall.middleRows(r.begin(), r.end() - r.begin()) * b.transpose();
+          const Eigen::Index rows = r.end() - r.begin();
+          if (b.rows() > 0) {
+            const MatF w = zall.middleRows(r.begin(), rows) * b.transpose();
+            for (std::size_t k = 0; k < stale.size(); ++k)
+              products_.block(r.begin(), first[stale[k]], rows, row_of[k + 1] - row_of[k]) =
+                  w.middleCols(row_of[k], row_of[k + 1] - row_of[k]);
+          }
           for (Eigen::Index x = r.begin(); x < r.end(); ++x) {
-            const auto row = w.row(x - r.begin());
+            const auto row = products_.row(x);
             const auto xs = static_cast<std::size_t>(x);
             const std::uint32_t cur = m_.assignments[xs];
             std::uint32_t best = cur;
@@ -451,6 +487,11 @@ class Cta {
           }
         },
         tbb::simple_partitioner());  // fixed blocks: the same products on any thread count
+    for (const std::size_t c : stale) products_bases_[c] = digests[c];
+    log_debug(
+        "srbf_cta: reclassification with the products of {} of {} clusters recomputed in "
+        "{:.2f} s",
+        stale.size(), m_.clusters.size(), seconds_since(t0));
     std::size_t moved = 0;
     for (std::size_t x = 0; x < t_.vertices; ++x) moved += next[x] != m_.assignments[x];
     m_.assignments = std::move(next);
@@ -616,7 +657,10 @@ class Cta {
   const CtaOptions& o_;
   StepStats step_stats_;
   RowMajorMatrixXd moved_weights_;  ///< vertices x R3: W_x in its new cluster, old bases
-  std::vector<char> reseeded_;      ///< clusters an emptied cluster's reseed gave a new start
+  MatF products_;                   ///< vertices x sum of R3: W_xc in float, reclassify()'s
+  std::vector<Eigen::Index> products_first_;  ///< products_' first column of each cluster
+  std::vector<Hash128> products_bases_;       ///< the bases each cluster's columns came from
+  std::vector<char> reseeded_;  ///< clusters an emptied cluster's reseed gave a new start
   Clock::time_point t0_;
   int r1_ = 0, r2_ = 0, r3_ = 0;
   std::vector<double> norms_;

@@ -718,7 +718,7 @@ CompressorEntry registry_entry() {
     return std::make_unique<SrbfCtaCompressor>(std::move(p));
   };
   e.load = &SrbfCtaTransfer::load;
-  e.version = 5;
+  e.version = 6;
   e.published = {
       {"bunny",
        {{"srbfs", "642"},

@@ -16,6 +16,9 @@ extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, c
                         const int* il, const int* iu, const double* abstol, int* m, double* w,
                         double* z, const int* ldz, int* isuppz, double* work, const int* lwork,
                         int* iwork, const int* liwork, int* info);
+#ifdef PRTLAB_OPENBLAS_REENTRANT
+extern "C" void openblas_set_num_threads(int num_threads);
+#endif
 #endif
 
 namespace prt {
@@ -73,10 +76,20 @@ SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
   const int il = subset ? n - cols + 1 : 1, iu = n;
   const double vl = 0, vu = 0, abstol = 0;
   double work_query = 0;
+#ifdef PRTLAB_OPENBLAS_REENTRANT
+  // The pthread build locks its buffers, so TBB's threads may call it together; its own threads
+  // would oversubscribe the cores (and make the result depend on their count).
+  static const bool one_thread = [] {
+    openblas_set_num_threads(1);
+    return true;
+  }();
+  (void)one_thread;
+#else
   // Debian's serial OpenBLAS shares internal buffers between calls without locking them: two
   // threads inside it at once corrupt each other's results. One call at a time.
   static std::mutex serial;
   const std::lock_guard lock(serial);
+#endif
   dsyevr_("V", range, "L", &n, a.data(), &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(),
           &n, isuppz.data(), &work_query, &lwork, &iwork_query, &liwork, &info);
   if (info != 0) throw Error(fmt::format("dsyevr's workspace query failed (info {})", info));
@@ -96,7 +109,11 @@ SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
 
 const char* symmetric_eigen_backend() {
   return eigen_forced() ? "Eigen SelfAdjointEigenSolver (PRTLAB_EIGEN_SOLVER=eigen)"
+#ifdef PRTLAB_OPENBLAS_REENTRANT
+                        : "LAPACK dsyevr (OpenBLAS pthread build, one thread a call)";
+#else
                         : "LAPACK dsyevr (OpenBLAS, serial)";
+#endif
 }
 #else
 SymmetricEigen top_symmetric_eigen(const Eigen::MatrixXd& g, Eigen::Index k) {
