@@ -6,8 +6,13 @@
 //                                  product in one kernel (ShadingOptions::cache_view_vectors off)
 //   shading/view_cache/<filter>    btf_view_cache: b(u, e) of every hit pixel, written to the
 //                                  device (what a view change adds)
-//   shading/cached_shade/<filter>  btf_shade_cached: the dot products with the cached b(u, e)
+//   shading/cached_shade/<filter>  btf_shade_cached: the dot products with the cached b(u, e),
+//                                  one work-item per hit pixel
 //                                  (all a light change needs)
+//   shading/view_cache_probe/<part>/nearest  the view-cache pass with one part left out
+//                                  (render/btf_shading.h, ShadingProbe; the image is wrong):
+//                                  the material's vector reads, the cache writes, the view
+//                                  samples (a fixed pattern instead), or all but the launch
 //   stream_read/<pattern>          a read-only kernel summing a 512 MiB buffer: each work-item a
 //                                  4 KiB block (blocks) or a grid-stride walk (strided)
 //
@@ -197,7 +202,8 @@ void BM_stream(benchmark::State& state, bool strided) {
 
 enum class Pass { kSingle, kViewCache, kCachedShade };
 
-void BM_shading(benchmark::State& state, Pass pass, prt::TexelFilter filter) {
+void BM_shading(benchmark::State& state, Pass pass, prt::TexelFilter filter,
+                prt::ShadingProbe probe = prt::ShadingProbe::kNone) {
   prt::ClContext* ctx = prt::default_context();
   if (!ctx) return state.SkipWithError("no OpenCL device");
   const Workload& w = workload();
@@ -205,6 +211,7 @@ void BM_shading(benchmark::State& state, Pass pass, prt::TexelFilter filter) {
   prt::ShadingOptions o;
   o.filter = filter;
   o.cache_view_vectors = pass != Pass::kSingle;
+  o.probe = probe;
   prt::DeviceBtfShader shader(*ctx, w.scene.mesh, w.materials, w.environment.get(), o);
   shader.set_gbuffer(w.gbuffer);
   shader.set_radiance(w.radiance);
@@ -304,6 +311,20 @@ void register_benchmarks() {
           ->UseManualTime()
           ->Unit(benchmark::kMillisecond);
     }
+  }
+  // The view-change kernel with one of its parts left out (ShadingProbe; the image is wrong):
+  // what each part costs, by difference with shading/view_cache/nearest.
+  for (const auto& [name, probe] : {std::pair{"no_vector_reads", prt::ShadingProbe::kNoVectorReads},
+                                    std::pair{"no_cache_writes", prt::ShadingProbe::kNoCacheWrites},
+                                    std::pair{"fixed_views", prt::ShadingProbe::kFixedViews},
+                                    std::pair{"launch_only", prt::ShadingProbe::kLaunchOnly}}) {
+    benchmark::RegisterBenchmark(
+        (std::string("shading/view_cache_probe/") + name + "/nearest").c_str(),
+        [probe = probe](benchmark::State& s) {
+          BM_shading(s, Pass::kViewCache, prt::TexelFilter::kNearest, probe);
+        })
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
   }
   benchmark::RegisterBenchmark("stream_read/blocks",
                                [](benchmark::State& s) { BM_stream(s, false); })

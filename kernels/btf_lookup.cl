@@ -128,6 +128,17 @@ void prt_bilinear_corners(int x0, int x1, int y0, int y1, int stride, float tx, 
 // btf_view_samples (btf.h): the 4 view samples around e and their weights, measured on the
 // sphere.
 void prt_view_samples(int side, float3 view, int* views, float* weights) {
+#ifdef PRT_PROBE_FIXED_VIEWS
+  // A benchmark's probe (render/btf_shading.h, ShadingProbe): 4 neighbouring views chosen by
+  // the view's x alone, in place of the sphere's interpolation.
+  const int v0 = ((int)(fabs(view.x) * (float)(side - 1))) * side + side / 2 - 1;
+  views[0] = clamp(v0, 0, side * side - 1);
+  views[1] = clamp(v0 + 1, 0, side * side - 1);
+  views[2] = clamp(v0 + side, 0, side * side - 1);
+  views[3] = clamp(v0 + side + 1, 0, side * side - 1);
+  weights[0] = weights[1] = weights[2] = weights[3] = 0.25f;
+  return;
+#endif
   const float3 e = prt_clamp_to_hemisphere(view);
   const float2 ab = prt_hemisphere_to_square(e);
   const int ix = (int)floor(ab.x * (float)side - 0.5f);

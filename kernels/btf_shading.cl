@@ -11,8 +11,9 @@
 //                     triangle's 3 vertices, the dot product; misses copy the background pixel
 //                     the host chose
 //   btf_view_cache    one work-item per hit pixel ("slot"): b(u, e, .), stored
-//   btf_shade_cached  one work-item per pixel: the dot product of the cached b(u, e) with the
-//                     interpolated L*
+//   btf_shade_cached  one work-item per hit pixel: the dot product of the cached b(u, e) with the
+//                     interpolated L*, written to the slot's pixel (a light change: the misses
+//                     keep what btf_shade_misses wrote)
 //   btf_view_cache_shade  one work-item per hit pixel: b(u, e, .) stored as btf_view_cache does
 //                     and, in the same pass, its dot product with L* written to the slot's pixel
 //                     (a view change: the cache is not read back)
@@ -108,18 +109,15 @@ __kernel PRT_WG_ATTR void btf_view_cache(const uint slots, __global const int2* 
   for (int c = PRT_CH12; c < PRT_CH; ++c) out[c] = prt_material_one(&mat, c PRT_MATERIAL_ARGS);
 }
 
+// A light change: only the hit pixels change, so the work-items are the slots (the misses keep
+// what btf_shade_misses wrote after the view pass); the pixel is written through slot_pixel.
 __kernel PRT_WG_ATTR void btf_shade_cached(
-    const uint pixels, __global const int* restrict code, __global const int2* restrict slot_ids,
-    __global const float4* restrict slot_geom, __global const uint* restrict indices,
-    __global const float* restrict radiance, __global const float* restrict cache,
-    __global const float* restrict background, __global float* restrict image) {
-  const uint i = get_global_id(0);
-  PRT_GUARD(i, pixels);
-  const int s = code[i];
-  if (s < 0) {
-    vstore3(vload3((uint)(-(s + 1)), background), i, image);
-    return;
-  }
+    const uint slots, __global const int2* restrict slot_ids,
+    __global const float4* restrict slot_geom, __global const uint* restrict slot_pixel,
+    __global const uint* restrict indices, __global const float* restrict radiance,
+    __global const float* restrict cache, __global float* restrict image) {
+  const uint s = get_global_id(0);
+  PRT_GUARD(s, slots);
   const float4 geom = slot_geom[s];
   PRT_TRIANGLE_LSTAR(slot_ids[s].x, geom);
   __global const float* b = cache + (ulong)s * PRT_CH;
@@ -133,7 +131,7 @@ __kernel PRT_WG_ATTR void btf_shade_cached(
   float tail[3] = {0.0f, 0.0f, 0.0f};
   for (int c = PRT_CH12; c < PRT_CH; ++c) tail[c % 3] += b[c] * PRT_LSTAR1;
   rgb += (float3)(tail[0], tail[1], tail[2]);
-  vstore3(rgb, i, image);
+  vstore3(rgb, slot_pixel[s], image);
 }
 
 // The first argument after `cache` is the material's (kViewCacheShadeMaterialArg). The dot
@@ -146,6 +144,10 @@ __kernel PRT_WG_ATTR void btf_view_cache_shade(
     __global float* restrict cache PRT_MATERIAL_PARAMS) {
   const uint s = get_global_id(0);
   PRT_GUARD(s, slots);
+#ifdef PRT_PROBE_LAUNCH_ONLY
+  vstore3((float3)(slot_geom[s].x), slot_pixel[s], image);
+  return;
+#endif
   const int2 ids = slot_ids[s];
   const float4 geom = slot_geom[s];
   prt_material mat;
@@ -155,10 +157,17 @@ __kernel PRT_WG_ATTR void btf_view_cache_shade(
   float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f);
   for (int c = 0; c < PRT_CH12; c += 12) {
     float4 b0, b1, b2;
+#ifdef PRT_PROBE_NO_VECTOR_READS
+    // The material's first word stands in, so that its begin (the view samples) is still done.
+    b0 = b1 = b2 = (float4)((float)c + (float)(*(const uint*)&mat));
+#else
     prt_material_chunk(&mat, c, &b0, &b1, &b2 PRT_MATERIAL_ARGS);
+#endif
+#ifndef PRT_PROBE_NO_CACHE_WRITES
     vstore4(b0, 0, out + c);
     vstore4(b1, 1, out + c);
     vstore4(b2, 2, out + c);
+#endif
     a0 += b0 * PRT_LSTAR4(0);
     a1 += b1 * PRT_LSTAR4(1);
     a2 += b2 * PRT_LSTAR4(2);

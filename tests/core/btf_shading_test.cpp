@@ -420,6 +420,42 @@ TEST(BtfShading, ViewCacheIsSkippedWhenNoPartGainsFromIt) {
   }
 }
 
+// A light change shades the hit pixels only: the misses keep what the view pass wrote, and a
+// new background (same layout, other values) between two light changes still reaches them. The
+// image equals a fresh shader's with that background, bit for bit.
+TEST(BtfShading, LightChangeKeepsTheMissesAndABackgroundChangeReachesThem) {
+  PRT_REQUIRE_OPENCL();
+  const auto& s = tiny();
+  Cubemap brighter = s.background;
+  for (Rgb& c : brighter.radiance) c = c * 2.0f + Rgb(0.25f);
+  DeviceBtfShader sh(*context(), s.scene.mesh, s.materials, &s.background);
+  ASSERT_TRUE(sh.uses_view_cache());
+  sh.set_gbuffer(s.front);
+  sh.set_radiance(s.radiance);
+  sh.shade();  // view pass: cache, hits, misses
+  sh.shade();  // light change: hits only
+  DeviceBtfShader fresh(*context(), s.scene.mesh, s.materials, &s.background);
+  fresh.set_gbuffer(s.front);
+  fresh.set_radiance(s.radiance);
+  fresh.shade();
+  EXPECT_EQ(sh.read_image().pixels, fresh.read_image().pixels);
+
+  sh.set_background(&brighter);
+  sh.shade();  // still a light change (the cache holds), the misses rewritten
+  EXPECT_EQ(sh.last_view_cache_ms(), 0.0);
+  DeviceBtfShader fresh_brighter(*context(), s.scene.mesh, s.materials, &brighter);
+  fresh_brighter.set_gbuffer(s.front);
+  fresh_brighter.set_radiance(s.radiance);
+  fresh_brighter.shade();
+  const RgbImage got = sh.read_image(), want = fresh_brighter.read_image();
+  EXPECT_EQ(got.pixels, want.pixels);
+  std::size_t misses_changed = 0;
+  const RgbImage before = fresh.read_image();
+  for (std::size_t i = 0; i < got.pixels.size(); ++i)
+    misses_changed += s.front.triangle[i] < 0 && !(got.pixels[i] == before.pixels[i]) ? 1 : 0;
+  EXPECT_GT(misses_changed, 0u);
+}
+
 TEST(BtfShading, RejectsMismatchedMaterialsAndRadiance) {
   const auto& s = tiny();
   ShadingMaterials one;

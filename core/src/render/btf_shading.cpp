@@ -142,9 +142,19 @@ struct DeviceBtfShader::Impl {
   std::optional<CubemapLayout> background_layout;  // of the uploaded background, if any
   int background_pixels = 0;                       // its N (0: none; index N is black)
   bool have_gbuffer = false, have_radiance = false, cache_valid = false;
+  // The image's miss pixels hold the current background (the cached pass over slots leaves
+  // them as the view pass's btf_shade_misses wrote them).
+  bool misses_valid = false;
   double last_cache_ms = 0.0;
 
   Impl(ClContext& c, const ShadingOptions& o) : ctx(c), options(o) {}
+
+  double shade_misses() {
+    set_args(misses, static_cast<cl_uint>(pixels), code, background, image);
+    cl::Event ev = launch(ctx, "btf_shade_misses", misses, LaunchRange::linear(pixels, kWorkGroup));
+    misses_valid = true;
+    return event_ms(ctx, ev, "btf_shade_misses");
+  }
 
   void compute_miss_codes() {
     const int black = background_pixels;
@@ -173,7 +183,8 @@ DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
 
   const std::vector<const CompressedMaterial*> parts = materials.parts();
   s.material = upload_materials(context, parts, material_device_options);
-  const cl::Program program = build_shading_program(context, *s.material, s.m, options.filter);
+  const cl::Program program =
+      build_shading_program(context, *s.material, s.m, options.filter, options.probe);
   s.single = make_kernel(program, "btf_shade_single");
   s.view_cache = make_kernel(program, "btf_view_cache");
   s.cached = make_kernel(program, "btf_shade_cached");
@@ -206,6 +217,7 @@ void DeviceBtfShader::set_background(const Cubemap* background) {
   // One black pixel past the cubemap: what misses show without a background.
   std::vector<Rgb> data(static_cast<std::size_t>(n) + 1, Rgb(0.0f));
   if (bg) std::copy(bg->radiance.begin(), bg->radiance.end(), data.begin());
+  s.misses_valid = false;
   const bool layout_changed = n != s.background_pixels || !s.background();
   if (layout_changed)
     s.background = upload(s.ctx, std::span<const Rgb>(data), "shading background");
@@ -323,6 +335,7 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
   }
   s.have_gbuffer = true;
   s.cache_valid = false;
+  s.misses_valid = false;
 }
 
 void DeviceBtfShader::set_radiance(const LocalRadiance& radiance) {
@@ -368,17 +381,20 @@ double DeviceBtfShader::shade() {
                           LaunchRange::linear(s.slots, kWorkGroup));
     s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache_shade");
     s.cache_valid = true;
-    set_args(s.misses, pixels, s.code, s.background, s.image);
-    cl::Event ev2 =
-        launch(s.ctx, "btf_shade_misses", s.misses, LaunchRange::linear(s.pixels, kWorkGroup));
-    return s.last_cache_ms + event_ms(s.ctx, ev2, "btf_shade_misses");
+    return s.last_cache_ms + s.shade_misses();
   }
   s.cache_valid = true;
-  set_args(s.cached, pixels, s.code, s.slot_ids, s.slot_geom, s.indices, s.radiance_source,
-           s.slots > 0 ? s.cache : s.slot_geom, s.background, s.image);
-  cl::Event ev =
-      launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.pixels, kWorkGroup));
-  return event_ms(s.ctx, ev, "btf_shade_cached");
+  // A light change: only the hits change; the misses are written once per G-buffer and
+  // background.
+  double ms = s.misses_valid ? 0.0 : s.shade_misses();
+  if (s.slots > 0) {
+    set_args(s.cached, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom, s.slot_pixel,
+             s.indices, s.radiance_source, s.cache, s.image);
+    cl::Event ev =
+        launch(s.ctx, "btf_shade_cached", s.cached, LaunchRange::linear(s.slots, kWorkGroup));
+    ms += event_ms(s.ctx, ev, "btf_shade_cached");
+  }
+  return ms;
 }
 
 bool DeviceBtfShader::uses_view_cache() const {

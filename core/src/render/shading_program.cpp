@@ -10,11 +10,27 @@
 namespace prt {
 
 cl::Program build_shading_program(ClContext& context, const DeviceMaterial& material, int m,
-                                  TexelFilter filter) {
+                                  TexelFilter filter, ShadingProbe probe) {
   KernelDefines defines = material.defines();
   defines.set("PRT_WG_SIZE", kShadingWorkGroup)
       .set("PRT_M", m)
       .set("PRT_BILINEAR", filter == TexelFilter::kBilinear ? 1 : 0);
+  switch (probe) {
+    case ShadingProbe::kNone:
+      break;
+    case ShadingProbe::kNoVectorReads:
+      defines.set("PRT_PROBE_NO_VECTOR_READS");
+      break;
+    case ShadingProbe::kNoCacheWrites:
+      defines.set("PRT_PROBE_NO_CACHE_WRITES");
+      break;
+    case ShadingProbe::kFixedViews:
+      defines.set("PRT_PROBE_FIXED_VIEWS");
+      break;
+    case ShadingProbe::kLaunchOnly:
+      defines.set("PRT_PROBE_LAUNCH_ONLY");
+      break;
+  }
   const std::string label = material.label();
   // #line markers keep the compiler's messages pointing at each file's own lines.
   std::string source(kernel_source("btf_lookup"));

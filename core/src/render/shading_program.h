@@ -7,6 +7,7 @@
 #include "prtlab/btf/btf.h"
 #include "prtlab/compress/material_compressor.h"
 #include "prtlab/opencl/cl_include.h"
+#include "prtlab/render/btf_shading.h"
 
 namespace prt {
 
@@ -18,8 +19,9 @@ inline constexpr unsigned kSingleMaterialArg = 9;
 inline constexpr unsigned kViewCacheMaterialArg = 5;
 inline constexpr unsigned kViewCacheShadeMaterialArg = 9;
 
-/// `m`: values per vertex of the light basis (PRT_M). Cached like every program.
+/// `m`: values per vertex of the light basis (PRT_M). Cached like every program. `probe`
+/// (benchmarks only) defines PRT_PROBE_* for btf_view_cache_shade.
 cl::Program build_shading_program(ClContext& context, const DeviceMaterial& material, int m,
-                                  TexelFilter filter);
+                                  TexelFilter filter, ShadingProbe probe = ShadingProbe::kNone);
 
 }  // namespace prt

@@ -53,6 +53,12 @@ namespace prt {
 
 class ClContext;
 
+/// What a benchmark leaves out of the view-change kernel (ShadingOptions::probe): the material's
+/// vector reads (its weights stand in for the vectors), the cache writes, the view samples (a
+/// fixed pattern of views stands in for prt_view_samples), or everything but one read and one
+/// write per hit pixel (the launch alone).
+enum class ShadingProbe { kNone, kNoVectorReads, kNoCacheWrites, kFixedViews, kLaunchOnly };
+
 struct ShadingOptions {
   TexelFilter filter = TexelFilter::kNearest;
   bool background = true;  ///< misses show the environment (needs a background cubemap)
@@ -61,6 +67,9 @@ struct ShadingOptions {
   /// (DeviceMaterial::view_cache_useful: every part a view-independent `full` BTF with nearest
   /// texels). The image is the same either way (to float rounding).
   bool cache_view_vectors = true;
+  /// For benchmarks only: a part of the view-change kernel (btf_view_cache_shade) left out, to
+  /// measure what each part costs. Any value but kNone makes the image wrong.
+  ShadingProbe probe = ShadingProbe::kNone;
 };
 
 /// The materials of a scene for shading: one compressed material per part (index = part id of
