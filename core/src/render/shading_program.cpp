@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <string>
 
 #include "prtlab/opencl/cl_kernel_sources.h"
@@ -15,22 +16,12 @@ cl::Program build_shading_program(ClContext& context, const DeviceMaterial& mate
   defines.set("PRT_WG_SIZE", kShadingWorkGroup)
       .set("PRT_M", m)
       .set("PRT_BILINEAR", filter == TexelFilter::kBilinear ? 1 : 0);
-  switch (probe) {
-    case ShadingProbe::kNone:
-      break;
-    case ShadingProbe::kNoVectorReads:
-      defines.set("PRT_PROBE_NO_VECTOR_READS");
-      break;
-    case ShadingProbe::kNoCacheWrites:
-      defines.set("PRT_PROBE_NO_CACHE_WRITES");
-      break;
-    case ShadingProbe::kFixedViews:
-      defines.set("PRT_PROBE_FIXED_VIEWS");
-      break;
-    case ShadingProbe::kLaunchOnly:
-      defines.set("PRT_PROBE_LAUNCH_ONLY");
-      break;
-  }
+  // Indexed by ShadingProbe.
+  static constexpr std::array<const char*, 5> kProbeDefine = {
+      nullptr, "PRT_PROBE_NO_VECTOR_READS", "PRT_PROBE_NO_CACHE_WRITES", "PRT_PROBE_FIXED_VIEWS",
+      "PRT_PROBE_LAUNCH_ONLY"};
+  if (const char* probe_define = kProbeDefine.at(static_cast<std::size_t>(probe)))
+    defines.set(probe_define);
   const std::string label = material.label();
   // #line markers keep the compiler's messages pointing at each file's own lines.
   std::string source(kernel_source("btf_lookup"));
