@@ -185,3 +185,103 @@ int prt_texel_samples(int res, float2 uv, int* texels, float* weights) {
   return 1;
 #endif
 }
+
+// ---- prt_view_samples for 16 view directions at once --------------------------------------
+// The same arithmetic as the scalar functions above, lane by lane, with selects for their
+// branches: PoCL runs a work-item's scalar code one pixel at a time (it vectorises nothing
+// across work-items in the shading kernels), so 16 pixels a work-item in float16 is what puts
+// the view samples on the vector units.
+
+float16 prt_atan_unit16(float16 z) {
+  const float16 az = fabs(z);
+  const int16 big = az > 0.41421356237f;
+  const float16 x = select(az, (az - 1.0f) / (az + 1.0f), big);
+  const float16 x2 = x * x;
+  const float16 p = (((8.05374449538e-2f * x2 - 1.38776856032e-1f) * x2 + 1.99777106478e-1f) * x2 -
+                     3.33329491539e-1f) *
+                        x2 * x +
+                    x;
+  return copysign(select((float16)(0.0f), (float16)(PRT_QUARTER_PI_F), big) + p, z);
+}
+
+void prt_sincos_quarter16(float16 t, float16* s_out, float16* c_out) {
+  const float16 t2 = t * t;
+  *s_out =
+      t *
+      (1.0f -
+       t2 / 6.0f *
+           (1.0f - t2 / 20.0f * (1.0f - t2 / 42.0f * (1.0f - t2 / 72.0f * (1.0f - t2 / 110.0f)))));
+  *c_out =
+      1.0f -
+      t2 / 2.0f *
+          (1.0f - t2 / 12.0f * (1.0f - t2 / 30.0f * (1.0f - t2 / 56.0f * (1.0f - t2 / 90.0f))));
+}
+
+void prt_square_to_hemisphere16(float16 a, float16 b, float16* ox, float16* oy, float16* oz) {
+  const float16 u = 2.0f * a - 1.0f, v = 2.0f * b - 1.0f;
+  const int16 centre = u == 0.0f && v == 0.0f;
+  const int16 horizontal = fabs(u) > fabs(v);
+  const float16 r = select(v, u, horizontal);
+  float16 s, c;
+  prt_sincos_quarter16(PRT_QUARTER_PI_F * select(u / v, v / u, horizontal), &s, &c);
+  const float16 cos_phi = select(s, c, horizontal), sin_phi = select(c, s, horizontal);
+  const float16 r2 = fmin(r * r, 1.0f);
+  const float16 f = sqrt(2.0f - r2);
+  *ox = select(r * cos_phi * f, (float16)(0.0f), centre);
+  *oy = select(r * sin_phi * f, (float16)(0.0f), centre);
+  *oz = select(1.0f - r2, (float16)(1.0f), centre);
+}
+
+void prt_view_samples16(int16 side, float16 vx, float16 vy, float16 vz, int16* views,
+                        float16* weights) {
+  // prt_clamp_to_hemisphere
+  const int16 finite = isfinite(vx) && isfinite(vy) && isfinite(vz);
+  const int16 axis = vx == 0.0f && vy == 0.0f;
+  const float16 cz = fmax(vz, 0.0f);
+  const float16 inv_len = 1.0f / sqrt(vx * vx + vy * vy + cz * cz);
+  float16 ex = vx * inv_len, ey = vy * inv_len, ez = cz * inv_len;
+  ex = select(ex, select((float16)(0.0f), (float16)(1.0f), vz < 0.0f), axis);
+  ey = select(ey, (float16)(0.0f), axis);
+  ez = select(ez, select((float16)(1.0f), (float16)(0.0f), vz < 0.0f), axis);
+  ex = select((float16)(0.0f), ex, finite);
+  ey = select((float16)(0.0f), ey, finite);
+  ez = select((float16)(1.0f), ez, finite);
+  // prt_hemisphere_to_square
+  const float16 inv = 1.0f / sqrt(1.0f + fabs(ez));
+  const float16 x = ex * inv, y = ey * inv;
+  const float16 r = sqrt(x * x + y * y);
+  const int16 wide = fabs(x) >= fabs(y);
+  const float16 ru = select(select(-r, r, y > 0.0f), select(-r, r, x > 0.0f), wide);
+  const float16 other = prt_atan_unit16(select(x / y, y / x, wide)) / PRT_QUARTER_PI_F * ru;
+  const float16 u = select(other, ru, wide), v = select(ru, other, wide);
+  const int16 origin = r == 0.0f;
+  const float16 ax = select(0.5f * (u + 1.0f), (float16)(0.5f), origin);
+  const float16 ay = select(0.5f * (v + 1.0f), (float16)(0.5f), origin);
+  // the grid cells around (ax, ay) and the fractions measured on the sphere
+  const float16 sidef = convert_float16(side);
+  const int16 ix = convert_int16(floor(ax * sidef - 0.5f));
+  const int16 iy = convert_int16(floor(ay * sidef - 0.5f));
+  const int16 x0 = clamp(ix, (int16)(0), side - 1), x1 = clamp(ix + 1, (int16)(0), side - 1);
+  const int16 y0 = clamp(iy, (int16)(0), side - 1), y1 = clamp(iy + 1, (int16)(0), side - 1);
+  float16 px0, py0, pz0, px1, py1, pz1;
+  prt_square_to_hemisphere16((convert_float16(x0) + 0.5f) / sidef, ay, &px0, &py0, &pz0);
+  prt_square_to_hemisphere16((convert_float16(x1) + 0.5f) / sidef, ay, &px1, &py1, &pz1);
+  float16 d0 = sqrt((ex - px0) * (ex - px0) + (ey - py0) * (ey - py0) + (ez - pz0) * (ez - pz0));
+  float16 d1 = sqrt((ex - px1) * (ex - px1) + (ey - py1) * (ey - py1) + (ez - pz1) * (ez - pz1));
+  const float16 tx =
+      select((float16)(0.0f), select((float16)(0.0f), d0 / (d0 + d1), d0 + d1 > 0.0f), x0 != x1);
+  prt_square_to_hemisphere16(ax, (convert_float16(y0) + 0.5f) / sidef, &px0, &py0, &pz0);
+  prt_square_to_hemisphere16(ax, (convert_float16(y1) + 0.5f) / sidef, &px1, &py1, &pz1);
+  d0 = sqrt((ex - px0) * (ex - px0) + (ey - py0) * (ey - py0) + (ez - pz0) * (ez - pz0));
+  d1 = sqrt((ex - px1) * (ex - px1) + (ey - py1) * (ey - py1) + (ez - pz1) * (ez - pz1));
+  const float16 ty =
+      select((float16)(0.0f), select((float16)(0.0f), d0 / (d0 + d1), d0 + d1 > 0.0f), y0 != y1);
+  views[0] = y0 * side + x0;
+  views[1] = y0 * side + x1;
+  views[2] = y1 * side + x0;
+  views[3] = y1 * side + x1;
+  weights[0] = (1.0f - tx) * (1.0f - ty);
+  weights[1] = tx * (1.0f - ty);
+  weights[2] = (1.0f - tx) * ty;
+  weights[3] = tx * ty;
+}

@@ -17,6 +17,8 @@
 //   btf_view_cache_shade  one work-item per hit pixel: b(u, e, .) stored as btf_view_cache does
 //                     and, in the same pass, its dot product with L* written to the slot's pixel
 //                     (a view change: the cache is not read back)
+//   btf_slot_view_samples  one work-item per 16 hit pixels: their view samples, for a material
+//                     that takes them precomputed (PRT_MATERIAL_SLOT_VIEWS)
 //   btf_shade_misses  one work-item per pixel: misses copy their background pixel, hits are left
 //                     to btf_view_cache_shade
 //
@@ -134,14 +136,53 @@ __kernel PRT_WG_ATTR void btf_shade_cached(
   vstore3(rgb, slot_pixel[s], image);
 }
 
-// The first argument after `cache` is the material's (kViewCacheShadeMaterialArg). The dot
+// The view samples of 16 hit pixels a work-item on their parts' view grids (part_view_side; 0:
+// none), for a material that takes them (PRT_MATERIAL_SLOT_VIEWS): prt_view_samples16, vector
+// code where the view-change kernel would run prt_view_samples one pixel at a time.
+__kernel PRT_WG_ATTR void btf_slot_view_samples(const uint slots,
+                                                __global const int2* restrict slot_ids,
+                                                __global const float4* restrict slot_view,
+                                                __global const int* restrict part_view_side,
+                                                __global int4* restrict slot_views,
+                                                __global float4* restrict slot_view_w) {
+  const uint first = get_global_id(0) * 16;
+  PRT_GUARD(first, slots);
+  float x[16], y[16], z[16];
+  int side[16];
+  for (int i = 0; i < 16; ++i) {
+    const uint s = min(first + (uint)i, slots - 1);
+    const float4 e = slot_view[s];
+    x[i] = e.x;
+    y[i] = e.y;
+    z[i] = e.z;
+    side[i] = max(part_view_side[slot_ids[s].y], 1);
+  }
+  int16 views[4];
+  float16 weights[4];
+  prt_view_samples16(vload16(0, side), vload16(0, x), vload16(0, y), vload16(0, z), views,
+                     weights);
+  int v[4][16];
+  float w[4][16];
+  for (int k = 0; k < 4; ++k) {
+    vstore16(views[k], 0, v[k]);
+    vstore16(weights[k], 0, w[k]);
+  }
+  for (int i = 0; i < 16 && first + (uint)i < slots; ++i) {
+    slot_views[first + i] = (int4)(v[0][i], v[1][i], v[2][i], v[3][i]);
+    slot_view_w[first + i] = (float4)(w[0][i], w[1][i], w[2][i], w[3][i]);
+  }
+}
+
+// The first argument after slot_view_w is the material's (kViewCacheShadeMaterialArg);
+// slot_views and slot_view_w are read only by a material with PRT_MATERIAL_SLOT_VIEWS. The dot
 // product is btf_shade_cached's, on the values it would read back from `cache`, in its order.
 __kernel PRT_WG_ATTR void btf_view_cache_shade(
     const uint slots, __global const int2* restrict slot_ids,
     __global const float4* restrict slot_geom, __global const float4* restrict slot_view,
     __global const uint* restrict slot_pixel, __global const uint* restrict indices,
     __global const float* restrict radiance, __global float* restrict image,
-    __global float* restrict cache PRT_MATERIAL_PARAMS) {
+    __global float* restrict cache, __global const int4* restrict slot_views,
+    __global const float4* restrict slot_view_w PRT_MATERIAL_PARAMS) {
   const uint s = get_global_id(0);
   PRT_GUARD(s, slots);
 #ifdef PRT_PROBE_LAUNCH_ONLY
@@ -151,7 +192,11 @@ __kernel PRT_WG_ATTR void btf_view_cache_shade(
   const int2 ids = slot_ids[s];
   const float4 geom = slot_geom[s];
   prt_material mat;
+#ifdef PRT_MATERIAL_SLOT_VIEWS
+  prt_material_begin_views(&mat, ids.y, geom.zw, slot_views[s], slot_view_w[s] PRT_MATERIAL_ARGS);
+#else
   prt_material_begin(&mat, ids.y, geom.zw, slot_view[s].xyz PRT_MATERIAL_ARGS);
+#endif
   PRT_TRIANGLE_LSTAR(ids.x, geom);
   __global float* out = cache + (ulong)s * PRT_CH;
   float4 a0 = (float4)(0.0f), a1 = (float4)(0.0f), a2 = (float4)(0.0f);

@@ -25,27 +25,18 @@ typedef struct {
   int n;
 } prt_material;
 
-// The (texel, view) vectors of a hit and their weights (Btf::texel_samples x btf_view_samples,
-// texel outer, view inner, zero weights dropped).
-void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
+#define PRT_MATERIAL_SLOT_VIEWS 1
+
+// The pairs of the texels around uv and the given view samples (texel outer, view inner, zero
+// weights dropped).
+void prt_table_pairs(prt_material* m, int part, float2 uv, const int* views, const float* view_w,
+                     int view_count PRT_MATERIAL_PARAMS) {
   const ulong base = table_part_offset[part];
   const int4 info = table_part_info[part];
-  const int res = info.x, side = info.y;
   int texels[4];
   float texel_w[4];
-  const int texel_count = prt_texel_samples(res, uv, texels, texel_w);
-  int views[4];
-  float view_w[4];
-  int view_count = 4;
-  if (info.z) {
-    // Every view holds the same values (Btf::view_independent): one vector per texel.
-    views[0] = 0;
-    view_w[0] = 1.0f;
-    view_count = 1;
-  } else {
-    prt_view_samples(side, view, views, view_w);
-  }
-  const ulong vcount = info.z ? 1 : (ulong)side * (ulong)side;
+  const int texel_count = prt_texel_samples(info.x, uv, texels, texel_w);
+  const ulong vcount = info.z ? 1 : (ulong)info.y * (ulong)info.y;
   int n = 0;
   for (int t = 0; t < texel_count; ++t) {
     for (int k = 0; k < view_count; ++k) {
@@ -57,6 +48,25 @@ void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MA
     }
   }
   m->n = n;
+}
+
+// The (texel, view) vectors of a hit and their weights (Btf::texel_samples x btf_view_samples;
+// a view-independent part, Btf::view_independent, has one vector per texel).
+void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
+  const int4 info = table_part_info[part];
+  int views[4] = {0, 0, 0, 0};
+  float view_w[4] = {1.0f, 0.0f, 0.0f, 0.0f};
+  if (!info.z) prt_view_samples(info.y, view, views, view_w);
+  prt_table_pairs(m, part, uv, views, view_w, info.z ? 1 : 4 PRT_MATERIAL_ARGS);
+}
+
+void prt_material_begin_views(prt_material* m, int part, float2 uv, int4 views4,
+                              float4 weights4 PRT_MATERIAL_PARAMS) {
+  const int4 info = table_part_info[part];
+  int views[4] = {views4.x, views4.y, views4.z, views4.w};
+  float view_w[4] = {weights4.x, weights4.y, weights4.z, weights4.w};
+  if (info.z) views[0] = 0, view_w[0] = 1.0f;
+  prt_table_pairs(m, part, uv, views, view_w, info.z ? 1 : 4 PRT_MATERIAL_ARGS);
 }
 
 void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,

@@ -44,6 +44,7 @@ class PackedDeviceMaterial final : public DeviceMaterial {
       vector_base.push_back(base_of_.at(p));
       info.push_back(it->second);
       views_read_.push_back(p->stored_views() == 1 ? 1 : 4);
+      view_sides_.push_back(p->stored_views() == 1 ? 0 : p->sampling().view_side);
     }
     if (vectors * len >= (std::uint64_t{1} << 32))
       throw ParameterError(
@@ -76,6 +77,7 @@ class PackedDeviceMaterial final : public DeviceMaterial {
   }
   std::uint64_t device_bytes() const override { return bytes_; }
   bool view_cache_useful(std::size_t, TexelFilter) const override { return true; }
+  std::vector<int> view_sides() const override { return view_sides_; }
   std::uint64_t bytes_per_hit(std::size_t part, TexelFilter filter) const override {
     const std::uint64_t texels = filter == TexelFilter::kBilinear ? 4 : 1;
     const std::uint64_t per_vector = static_cast<std::uint64_t>(m_) * 3 * value_bytes_ +
@@ -88,6 +90,7 @@ class PackedDeviceMaterial final : public DeviceMaterial {
   cl::Buffer codes_, scales_, slots_, part_base_, part_info_;
   std::map<const PackedMaterial*, std::uint64_t> base_of_;
   std::vector<int> views_read_;
+  std::vector<int> view_sides_;  // per part, its view grid's side (0: one stored view)
   std::uint64_t bytes_ = 0, value_bytes_ = 1;
   int m_ = 0;
 };

@@ -119,9 +119,13 @@ struct DeviceBtfShader::Impl {
   MaterialLightBasis basis;
   std::unique_ptr<DeviceMaterial> material;
   std::vector<std::uint64_t> part_material_bytes;  // material bytes a hit pixel of each part reads
-  cl::Kernel single, view_cache, cached, view_cache_shade, misses;
+  cl::Kernel single, view_cache, cached, view_cache_shade, misses, slot_view_samples;
   cl::Buffer indices;
   cl::Buffer code, slot_ids, slot_geom, slot_view, slot_pixel, radiance, cache, background, image;
+  // The view samples of every hit slot (btf_slot_view_samples), for a material that takes them
+  // precomputed (DeviceMaterial::view_sides non-empty); part_view_side its grid side per part.
+  bool slot_views_used = false;
+  cl::Buffer part_view_side, slot_views, slot_view_w;
   // The buffer the kernels read L* from: `radiance` (uploaded by set_radiance) or a
   // relighter's output buffer (set_radiance_buffer).
   cl::Buffer radiance_source;
@@ -193,6 +197,15 @@ DeviceBtfShader::DeviceBtfShader(ClContext& context, const Mesh& mesh,
   s.view_cache_shade = make_kernel(program, "btf_view_cache_shade");
   s.misses = make_kernel(program, "btf_shade_misses");
   s.material->set_args(s.view_cache_shade, kViewCacheShadeMaterialArg);
+  if (const std::vector<int> sides = s.material->view_sides(); !sides.empty()) {
+    PRT_CHECK(sides.size() == s.parts, "material {}: {} view sides for {} parts",
+              s.material->label(), sides.size(), s.parts);
+    s.slot_views_used = true;
+    s.slot_view_samples = make_kernel(program, "btf_slot_view_samples");
+    const std::vector<cl_int> side_values(sides.begin(), sides.end());
+    s.part_view_side =
+        upload(context, std::span<const cl_int>(side_values), "shading part view sides");
+  }
   for (std::size_t p = 0; p < s.parts; ++p) {
     s.part_material_bytes.push_back(s.material->bytes_per_hit(p, options.filter));
     s.use_cache = s.use_cache || s.material->view_cache_useful(p, options.filter);
@@ -316,6 +329,9 @@ void DeviceBtfShader::set_gbuffer(const GBuffer& g) {
     s.slot_geom = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
     s.slot_view = make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_ONLY, "shading slots");
     s.slot_pixel = make_buffer(s.ctx, n * sizeof(cl_uint), CL_MEM_READ_ONLY, "shading slots");
+    s.slot_views = make_buffer(s.ctx, n * sizeof(cl_int4), CL_MEM_READ_WRITE, "slot view samples");
+    s.slot_view_w =
+        make_buffer(s.ctx, n * sizeof(cl_float4), CL_MEM_READ_WRITE, "slot view samples");
     s.slot_capacity = n;
   }
   write_buffer(s.ctx, s.code, s.codes.data(), s.pixels * sizeof(std::int32_t),
@@ -375,11 +391,20 @@ double DeviceBtfShader::shade() {
   }
   if (!s.cache_valid && s.slots > 0) {
     // A new G-buffer: build the cache and shade the hits in one pass, then the misses.
+    double views_ms = 0.0;
+    if (s.slot_views_used) {
+      set_args(s.slot_view_samples, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_view,
+               s.part_view_side, s.slot_views, s.slot_view_w);
+      cl::Event ev = launch(s.ctx, "btf_slot_view_samples", s.slot_view_samples,
+                            LaunchRange::linear((s.slots + 15) / 16, kWorkGroup));
+      views_ms = event_ms(s.ctx, ev, "btf_slot_view_samples");
+    }
     set_args(s.view_cache_shade, static_cast<cl_uint>(s.slots), s.slot_ids, s.slot_geom,
-             s.slot_view, s.slot_pixel, s.indices, s.radiance_source, s.image, s.cache);
+             s.slot_view, s.slot_pixel, s.indices, s.radiance_source, s.image, s.cache,
+             s.slot_views, s.slot_view_w);
     cl::Event ev = launch(s.ctx, "btf_view_cache_shade", s.view_cache_shade,
                           LaunchRange::linear(s.slots, kWorkGroup));
-    s.last_cache_ms = event_ms(s.ctx, ev, "btf_view_cache_shade");
+    s.last_cache_ms = views_ms + event_ms(s.ctx, ev, "btf_view_cache_shade");
     s.cache_valid = true;
     return s.last_cache_ms + s.shade_misses();
   }

@@ -58,6 +58,7 @@ class BtfTableDeviceMaterial final : public DeviceMaterial {
       offsets.push_back(offset_of.at(&b));
       info.push_back(cl_int4{{b.resolution(), b.view_side(), b.view_independent() ? 1 : 0, 0}});
       views_read_.push_back(b.view_independent() ? 1 : 4);
+      view_sides_.push_back(b.view_independent() ? 0 : b.view_side());
     }
     m_ = parts.front()->light_count();
     part_offset_ =
@@ -73,6 +74,7 @@ class BtfTableDeviceMaterial final : public DeviceMaterial {
     set_args_from(kernel, first, data_, part_offset_, part_info_);
   }
   std::uint64_t device_bytes() const override { return bytes_; }
+  std::vector<int> view_sides() const override { return view_sides_; }
   bool view_cache_useful(std::size_t part, TexelFilter filter) const override {
     return views_read_.at(part) > 1 || filter == TexelFilter::kBilinear;
   }
@@ -85,6 +87,7 @@ class BtfTableDeviceMaterial final : public DeviceMaterial {
  private:
   cl::Buffer data_, part_offset_, part_info_;
   std::vector<int> views_read_;  // view vectors a hit pixel of each part reads per texel
+  std::vector<int> view_sides_;  // per part, its view grid's side (0: view-independent)
   std::string label_;
   int m_ = 0;
   std::uint64_t bytes_ = 0;

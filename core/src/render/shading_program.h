@@ -17,7 +17,7 @@ inline constexpr std::size_t kShadingWorkGroup = 64;
 /// Arguments btf_shade_single and btf_view_cache take before PRT_MATERIAL_PARAMS.
 inline constexpr unsigned kSingleMaterialArg = 9;
 inline constexpr unsigned kViewCacheMaterialArg = 5;
-inline constexpr unsigned kViewCacheShadeMaterialArg = 9;
+inline constexpr unsigned kViewCacheShadeMaterialArg = 11;
 
 /// `m`: values per vertex of the light basis (PRT_M). Cached like every program. `probe`
 /// (benchmarks only) defines PRT_PROBE_* for btf_view_cache_shade.

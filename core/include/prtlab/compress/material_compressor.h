@@ -32,11 +32,20 @@
 //   float prt_material_one(const prt_material* m, int c PRT_MATERIAL_PARAMS)
 //       the float c of b(u, e, .) (the 3 PRT_M % 12 tail floats)
 //
+// A material whose lookup interpolates view samples (prt_view_samples of btf_lookup.cl) on one
+// view grid per part may also define PRT_MATERIAL_SLOT_VIEWS and
+//   void prt_material_begin_views(prt_material* m, int part, float2 uv, int4 views,
+//                                 float4 view_weights PRT_MATERIAL_PARAMS)
+// which is prt_material_begin with those view samples given; DeviceMaterial::view_sides() then
+// names each part's grid side, and the view-change kernel takes the samples from a kernel that
+// computes them for 16 hit pixels a work-item in vector code.
+//
 // DeviceMaterial::set_args binds the PRT_MATERIAL_PARAMS after each kernel's own arguments.
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "prtlab/base/progress.h"
 #include "prtlab/base/types.h"
@@ -91,6 +100,12 @@ class DeviceMaterial {
   /// (the shader's view cache) can save work over evaluating the material again: false only when
   /// the lookup itself is one read of the vector the cache would hold (a view-independent `full`
   /// BTF with nearest texels). The shader skips the cache when no part gains from it.
+  /// The side of each part's view grid when the material's source defines
+  /// PRT_MATERIAL_SLOT_VIEWS and prt_material_begin_views (the material contract, file comment):
+  /// the shader then computes the view samples of every hit pixel once, 16 pixels a work-item,
+  /// and hands them to prt_material_begin_views. 0 for a part whose lookup takes none. Empty
+  /// (the default): prt_material_begin computes what it needs.
+  virtual std::vector<int> view_sides() const { return {}; }
   virtual bool view_cache_useful(std::size_t /*part*/, TexelFilter /*filter*/) const {
     return true;
   }

@@ -18,7 +18,7 @@
 namespace prt {
 
 /// Bumped whenever a header a plugin compiles against changes in a way that breaks binaries.
-inline constexpr int kPluginApiVersion = 6;
+inline constexpr int kPluginApiVersion = 7;
 
 /// Opens a plugin library and returns the names it registered ("quantized8", ...). Throws
 /// InputError naming the file when it is missing, cannot be opened, was built for another
