@@ -155,6 +155,28 @@ void prt_view_samples(int side, float3 view, int* views, float* weights) {
   prt_bilinear_corners(x0, x1, y0, y1, side, tx, ty, views, weights);
 }
 
+// The view samples of a lookup on a part's grid of `side`: the 4 around `view`, or view 0 with
+// weight 1 for a view-independent part. Returns how many (4 or 1).
+int prt_part_view_samples(int side, int view_independent, float3 view, int* views, float* w) {
+  views[0] = views[1] = views[2] = views[3] = 0;
+  w[0] = 1.0f;
+  w[1] = w[2] = w[3] = 0.0f;
+  if (view_independent) return 1;
+  prt_view_samples(side, view, views, w);
+  return 4;
+}
+
+// The same from samples computed beforehand (btf_slot_view_samples).
+int prt_given_view_samples(int4 given, float4 given_w, int view_independent, int* views,
+                           float* w) {
+  views[0] = given.x, views[1] = given.y, views[2] = given.z, views[3] = given.w;
+  w[0] = given_w.x, w[1] = given_w.y, w[2] = given_w.z, w[3] = given_w.w;
+  if (!view_independent) return 4;
+  views[0] = 0;
+  w[0] = 1.0f;
+  return 1;
+}
+
 // x mod 1 in [0, 1]; 0 for a non-finite x (as btf.cpp's fract, not OpenCL's fract()).
 float prt_fract(float x) {
   const float f = x - floor(x);

@@ -74,19 +74,19 @@ void packed_pairs(prt_material* m, int part, float2 uv, const int* views, const 
 
 void prt_material_begin(prt_material* m, int part, float2 uv, float3 view PRT_MATERIAL_PARAMS) {
   const int4 info = packed_part_info[part];
-  int views[4] = {0, 0, 0, 0};
-  float view_w[4] = {1.0f, 0.0f, 0.0f, 0.0f};
-  if (!info.z) prt_view_samples(info.y, view, views, view_w);
-  packed_pairs(m, part, uv, views, view_w, info.z ? 1 : 4 PRT_MATERIAL_ARGS);
+  int views[4];
+  float view_w[4];
+  const int count = prt_part_view_samples(info.y, info.z, view, views, view_w);
+  packed_pairs(m, part, uv, views, view_w, count PRT_MATERIAL_ARGS);
 }
 
 void prt_material_begin_views(prt_material* m, int part, float2 uv, int4 views4,
                               float4 weights4 PRT_MATERIAL_PARAMS) {
-  const int4 info = packed_part_info[part];
-  int views[4] = {views4.x, views4.y, views4.z, views4.w};
-  float view_w[4] = {weights4.x, weights4.y, weights4.z, weights4.w};
-  if (info.z) views[0] = 0, view_w[0] = 1.0f;
-  packed_pairs(m, part, uv, views, view_w, info.z ? 1 : 4 PRT_MATERIAL_ARGS);
+  int views[4];
+  float view_w[4];
+  const int count =
+      prt_given_view_samples(views4, weights4, packed_part_info[part].z, views, view_w);
+  packed_pairs(m, part, uv, views, view_w, count PRT_MATERIAL_ARGS);
 }
 
 void prt_material_chunk(const prt_material* m, int c, float4* b0, float4* b1,
